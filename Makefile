@@ -1,0 +1,68 @@
+# swarmgen developer entry points. Works on a fresh machine with Python 3.11 and make:
+# the venv and the system packages the tests need (Qt SCXML, Graphviz) are installed on demand.
+PYTHON ?= python3.11
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+SAMPLES := $(sort $(wildcard sample_models/*/*.xmi))
+SYSTEM_PYTHON := /usr/bin/python3
+
+.PHONY: demo test lint typecheck pytest generated check-generated golden schema sysdeps bench clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet -e '.[dev]'
+	touch $(STAMP)
+
+# Qt SCXML (system python3 + PySide2) is the independent engine the tests run our SCXML in.
+sysdeps:
+	@if ! $(SYSTEM_PYTHON) -c 'import PySide2.QtScxml' >/dev/null 2>&1 || ! command -v dot >/dev/null; then \
+		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+		$$SUDO apt-get update -qq && \
+		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq \
+			python3-pyside2.qtscxml libqt6scxml6-bin graphviz >/dev/null; \
+	fi
+
+## demo: compile every sample model into generated/<model>/ (SCXML per member type)
+demo: $(STAMP)
+	@for model in $(SAMPLES); do \
+		name=$$(basename $$(dirname $$model)); \
+		$(BIN)/swarmgen validate $$model >/dev/null && \
+		$(BIN)/swarmgen compile $$model -o generated/$$name || exit 1; \
+	done
+	@echo "generated/ is up to date; see generated/*/scxml/"
+
+generated: demo
+
+check-generated: $(STAMP)
+	@for model in $(SAMPLES); do \
+		name=$$(basename $$(dirname $$model)); \
+		$(BIN)/swarmgen compile $$model -o generated/$$name --check || exit 1; \
+	done
+
+## test: lint, type-check and the whole test suite (what CI runs)
+test: lint typecheck pytest
+
+lint: $(STAMP)
+	$(BIN)/ruff check swarmgen tests benchmarks
+	$(BIN)/ruff format --check swarmgen tests benchmarks
+
+typecheck: $(STAMP)
+	$(BIN)/mypy
+
+pytest: $(STAMP) sysdeps
+	$(BIN)/pytest -q
+
+## golden: rewrite the golden files after reviewing the diff
+golden: $(STAMP)
+	$(BIN)/pytest -q tests/test_golden.py --update-golden
+
+schema: $(STAMP)
+	$(BIN)/swarmgen schema -o schemas
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/bench_compile.py
+
+clean:
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build dist

@@ -1,0 +1,149 @@
+"""The `swarmgen` command line: thin click commands over `swarmgen.pipeline`.
+
+Exit codes: 0 clean (warnings allowed), 1 model errors or `--check` drift, 2 unreadable input or
+misuse, 3 an internal error (a bug in swarmgen: please report it).
+"""
+
+from __future__ import annotations
+
+import sys
+import traceback
+from collections.abc import Callable
+from functools import wraps
+from pathlib import Path
+from typing import ParamSpec, TypeVar
+
+import click
+
+from swarmgen import __version__, pipeline
+from swarmgen import diagnostics as dg
+
+P = ParamSpec("P")
+R = TypeVar("R")
+INTERNAL_ERROR = 3
+
+
+def _guarded(command: Callable[P, R]) -> Callable[P, R]:
+    """Turn unexpected exceptions into one clear line (and the traceback only on request)."""
+
+    @wraps(command)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        try:
+            return command(*args, **kwargs)
+        except (click.exceptions.Exit, click.ClickException, click.Abort):
+            raise
+        except pipeline.OutputError as err:
+            click.echo(f"swarmgen: error: {err}", err=True)
+            sys.exit(dg.ExitCode.INPUT_ERROR)
+        except Exception as err:  # a bug: report it without a traceback wall
+            click.echo(f"swarmgen: internal error: {type(err).__name__}: {err}", err=True)
+            click.echo(
+                "  please report this with the model attached; SWARMGEN_DEBUG=1 shows the traceback",
+                err=True,
+            )
+            if _debug():
+                traceback.print_exc()
+            sys.exit(INTERNAL_ERROR)
+
+    return wrapper
+
+
+def _debug() -> bool:
+    import os
+
+    return os.environ.get("SWARMGEN_DEBUG", "") not in {"", "0"}
+
+
+def _emit_diagnostics(diagnostics: list[dg.Diagnostic], fmt: str, *, to_stdout: bool) -> None:
+    text = dg.render_json(diagnostics) if fmt == "json" else dg.render_text(diagnostics)
+    if text:
+        click.echo(text, nl=False, err=not to_stdout)
+
+
+MODEL = click.argument("model", type=click.Path(path_type=Path))
+FORMAT = click.option(
+    "--format",
+    "fmt",
+    type=click.Choice(["text", "json"]),
+    default="text",
+    show_default=True,
+    help="How diagnostics are printed.",
+)
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="swarmgen")
+def main() -> None:
+    """Compile Modelio swarm models (XMI) to validated SCXML and runnable code."""
+
+
+@main.command()
+@MODEL
+@FORMAT
+@_guarded
+def validate(model: Path, fmt: str) -> None:
+    """Check MODEL and print its diagnostics (exit 0 clean, 1 errors, 2 unreadable)."""
+    result = pipeline.validate(model)
+    _emit_diagnostics(result.diagnostics, fmt, to_stdout=True)
+    click.echo(f"swarmgen: {model}: {dg.summary_line(result.diagnostics)}", err=True)
+    sys.exit(result.exit_code)
+
+
+@main.command(name="compile")
+@MODEL
+@click.option(
+    "-o", "--output", type=click.Path(path_type=Path), required=True, help="Output directory."
+)
+@click.option("--check", is_flag=True, help="Write nothing; exit 1 with a diff if OUTPUT is stale.")
+@FORMAT
+@_guarded
+def compile_(model: Path, output: Path, check: bool, fmt: str) -> None:
+    """Compile MODEL into OUTPUT (SCXML per member type), replacing it atomically."""
+    result = pipeline.compile_model(model)
+    diagnostics = result.validation.diagnostics
+    _emit_diagnostics(diagnostics, fmt, to_stdout=False)
+    if not result.files:
+        click.echo(f"swarmgen: {model}: {dg.summary_line(diagnostics)}; nothing written", err=True)
+        sys.exit(result.validation.exit_code or dg.ExitCode.MODEL_ERRORS)
+    if check:
+        difference = pipeline.diff_tree(result.files, output)
+        if difference:
+            click.echo(difference, nl=False)
+            click.echo(
+                f"swarmgen: {output} is stale; run: swarmgen compile {model} -o {output}", err=True
+            )
+            sys.exit(dg.ExitCode.MODEL_ERRORS)
+        click.echo(f"swarmgen: {output} is up to date", err=True)
+        return
+    pipeline.write_tree(result.files, output)
+    count = sum(1 for p in result.files if p.suffix == ".scxml")
+    click.echo(
+        f"swarmgen: {model} -> {output}: {count} SCXML document(s); {dg.summary_line(diagnostics)}",
+        err=True,
+    )
+
+
+@main.command()
+@click.option(
+    "-o",
+    "--output",
+    type=click.Path(path_type=Path),
+    default=Path("schemas"),
+    show_default=True,
+    help="Directory for ir.schema.json.",
+)
+@click.option("--check", is_flag=True, help="Exit 1 if the schema on disk is stale.")
+@_guarded
+def schema(output: Path, check: bool) -> None:
+    """Write the JSON Schema of swarmgen's IR."""
+    target = output / "ir.schema.json"
+    text = pipeline.ir_schema()
+    if check:
+        current = target.read_text(encoding="utf-8") if target.is_file() else ""
+        if current != text:
+            click.echo(f"swarmgen: {target} is stale; run: swarmgen schema -o {output}", err=True)
+            sys.exit(dg.ExitCode.MODEL_ERRORS)
+        return
+    output.mkdir(parents=True, exist_ok=True)
+    target.write_text(text, encoding="utf-8")
+    click.echo(f"swarmgen: wrote {target}", err=True)

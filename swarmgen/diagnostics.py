@@ -1,0 +1,255 @@
+"""Diagnostics as data: stable codes, severities, spans and hints, rendered as text or JSON.
+
+Every stage returns its diagnostics instead of raising on model errors. Codes are registered
+once here so that `docs/diagnostics.md` and the renderers agree.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+from enum import IntEnum, StrEnum
+from pathlib import Path
+
+from swarmgen.span import Span
+
+
+class Severity(StrEnum):
+    ERROR = "error"
+    WARNING = "warning"
+    NOTE = "note"
+
+
+class ExitCode(IntEnum):
+    """Exit codes shared by every command (datamodel-codegen's OK/DIFF/ERROR split)."""
+
+    OK = 0
+    MODEL_ERRORS = 1  # the model has errors, or `--check` found drift
+    INPUT_ERROR = 2  # the input could not be read, or the command was misused
+
+
+@dataclass(frozen=True)
+class Code:
+    id: str
+    name: str
+    summary: str
+    severity: Severity
+    # Input problems end with exit code 2; model problems with 1.
+    input_error: bool = False
+
+
+CODES: dict[str, Code] = {}
+
+
+def _code(
+    id_: str,
+    name: str,
+    summary: str,
+    severity: Severity = Severity.ERROR,
+    *,
+    input_error: bool = False,
+) -> Code:
+    code = Code(id_, name, summary, severity, input_error)
+    assert id_ not in CODES, id_
+    CODES[id_] = code
+    return code
+
+
+# --- input: the file could not be read as an XMI model (exit 2)
+UNREADABLE = _code(
+    "SG001", "unreadable-input", "the input is missing, not a file, or empty", input_error=True
+)
+NOT_XML = _code("SG002", "not-well-formed", "the input is not well-formed XML", input_error=True)
+FORBIDDEN_XML = _code(
+    "SG003", "forbidden-xml", "DTDs, entities and XInclude are refused", input_error=True
+)
+NOT_XMI = _code("SG004", "not-xmi", "the root element is not XMI or UML", input_error=True)
+TOO_LARGE = _code(
+    "SG005", "input-too-large", "the input exceeds a size or depth limit", input_error=True
+)
+# --- model structure (exit 1)
+DUPLICATE_ID = _code("SG010", "duplicate-id", "two elements share one xmi:id")
+DANGLING_REF = _code("SG011", "dangling-reference", "a reference names no element of the model")
+UNKNOWN_STEREOTYPE = _code(
+    "SG012", "unknown-stereotype", "a stereotype that swarmgen does not know", Severity.WARNING
+)
+UNKNOWN_TAG = _code(
+    "SG013", "unknown-tag", "a tagged value that swarmgen does not know", Severity.WARNING
+)
+BAD_TAG_VALUE = _code("SG014", "bad-tag-value", "a tagged value outside its allowed values")
+WRONG_REF_KIND = _code(
+    "SG015", "wrong-reference-kind", "a reference names an element of the wrong kind"
+)
+NO_MACHINE = _code(
+    "SG020", "no-state-machine", "the model holds no state machine", Severity.WARNING
+)
+MEMBER_WITHOUT_MACHINE = _code(
+    "SG021", "member-without-machine", "a member type owns no state machine", Severity.WARNING
+)
+BAD_MULTIPLICITY = _code("SG022", "bad-multiplicity", "a multiplicity that is not a count")
+# --- state machines
+MISSING_INITIAL = _code(
+    "SG101", "missing-initial", "a region with states has no initial pseudostate"
+)
+DUPLICATE_INITIAL = _code(
+    "SG102", "duplicate-initial", "a region has more than one initial pseudostate"
+)
+BAD_TARGET = _code("SG103", "bad-transition-end", "a transition source or target is not a vertex")
+SUBMACHINE_CYCLE = _code(
+    "SG104", "submachine-cycle", "a state machine contains itself as a submachine"
+)
+UNKNOWN_BEHAVIOUR = _code("SG105", "unknown-behaviour", "a doActivity names no library behaviour")
+UNKNOWN_EVENT = _code("SG106", "unknown-event", "a trigger names no declared event or outcome")
+GUARD_SYNTAX = _code("SG107", "guard-syntax", "a guard is not in the expression language")
+EFFECT_SYNTAX = _code("SG108", "effect-syntax", "an effect or entry/exit action does not parse")
+BINDING_ERROR = _code("SG109", "binding-error", "a behaviour argument binding is wrong")
+NAME_COLLISION = _code("SG110", "name-collision", "two names become the same identifier")
+OUTCOME_WITHOUT_BEHAVIOUR = _code(
+    "SG111",
+    "outcome-without-behaviour",
+    "a transition waits for an outcome but its state runs no behaviour",
+)
+UNKNOWN_NAME = _code("SG112", "unknown-name", "an expression uses a name that is not member data")
+UNKNOWN_FIELD = _code(
+    "SG113", "unknown-event-field", "an expression uses a field the event does not have"
+)
+OPAQUE_CODE = _code(
+    "SG114", "opaque-code", "code in a foreign language is kept but not executed", Severity.WARNING
+)
+BAD_INITIAL_TRANSITION = _code(
+    "SG115",
+    "bad-initial-transition",
+    "an initial transition has a trigger or guard, or is not single",
+)
+BAD_PSEUDOSTATE = _code("SG116", "bad-pseudostate", "a pseudostate used against its rules")
+FINAL_WITH_OUTGOING = _code("SG117", "final-with-outgoing", "a transition leaves a final state")
+UNSUPPORTED = _code(
+    "SG118", "unsupported", "a UML construct that swarmgen does not translate", Severity.WARNING
+)
+UNKNOWN_OUTCOME = _code(
+    "SG119", "unknown-outcome", "a transition waits for an outcome its behaviour cannot produce"
+)
+EVENT_ARGUMENT = _code(
+    "SG120", "event-argument", "raise/send gives a field the event does not have"
+)
+MACHINE_TOO_DEEP = _code("SG121", "nesting-too-deep", "states nested deeper than the limit")
+
+
+@dataclass(frozen=True)
+class Diagnostic:
+    """One finding: what, where, and how to fix it."""
+
+    code: Code
+    message: str
+    span: Span
+    severity: Severity | None = None  # None: the code's own severity
+    hint: str | None = None
+    notes: tuple[str, ...] = field(default=())
+
+    @property
+    def level(self) -> Severity:
+        return self.severity or self.code.severity
+
+    def sort_key(self) -> tuple[str, int, int, str, str]:
+        return (self.span.file, self.span.line, self.span.col, self.code.id, self.message)
+
+    def to_dict(self) -> dict[str, object]:
+        return {
+            "code": self.code.id,
+            "name": self.code.name,
+            "severity": self.level.value,
+            "message": self.message,
+            "file": self.span.file,
+            "line": self.span.line,
+            "col": self.span.col,
+            "xmi_id": self.span.xmi_id,
+            "path": self.span.path,
+            "hint": self.hint,
+            "notes": list(self.notes),
+        }
+
+
+def diag(
+    code: Code, message: str, span: Span, *, hint: str | None = None, notes: Sequence[str] = ()
+) -> Diagnostic:
+    return Diagnostic(code, message, span, hint=hint, notes=tuple(notes))
+
+
+def normalise(diagnostics: Iterable[Diagnostic]) -> list[Diagnostic]:
+    """Sorted by position, duplicates removed (mypy's Errors does the same)."""
+    seen: set[tuple[object, ...]] = set()
+    unique: list[Diagnostic] = []
+    for d in sorted(diagnostics, key=Diagnostic.sort_key):
+        key = (*d.sort_key(), d.span.xmi_id)
+        if key not in seen:
+            seen.add(key)
+            unique.append(d)
+    return unique
+
+
+def has_errors(diagnostics: Iterable[Diagnostic]) -> bool:
+    return any(d.level is Severity.ERROR for d in diagnostics)
+
+
+def exit_code_for(diagnostics: Sequence[Diagnostic]) -> ExitCode:
+    errors = [d for d in diagnostics if d.level is Severity.ERROR]
+    if any(d.code.input_error for d in errors):
+        return ExitCode.INPUT_ERROR
+    return ExitCode.MODEL_ERRORS if errors else ExitCode.OK
+
+
+def render_text(diagnostics: Sequence[Diagnostic], *, excerpt: bool = True) -> str:
+    """`model.xmi:42:7: error: message [SG102]`, then the path, a source excerpt and hints."""
+    sources: dict[str, list[str] | None] = {}
+    blocks = [_render_one(d, sources if excerpt else None) for d in diagnostics]
+    return "".join(blocks)
+
+
+def _render_one(d: Diagnostic, sources: dict[str, list[str] | None] | None) -> str:
+    lines = [f"{d.span.location()}: {d.level.value}: {d.message} [{d.code.id}]"]
+    if d.span.path:
+        lines.append(f"  in: {d.span.path}")
+    if sources is not None and d.span.line > 0:
+        lines.extend(_excerpt(d.span, sources))
+    lines.extend(f"  note: {n}" for n in d.notes)
+    if d.hint:
+        lines.append(f"  hint: {d.hint}")
+    return "\n".join(lines) + "\n"
+
+
+def _excerpt(span: Span, sources: dict[str, list[str] | None]) -> list[str]:
+    if span.file not in sources:
+        sources[span.file] = _read_lines(span.file)
+    text = sources[span.file]
+    if text is None or span.line > len(text):
+        return []
+    line = text[span.line - 1].rstrip("\n")
+    if len(line) > 160:
+        line = line[:157] + "..."
+    caret = " " * (max(span.col, 1) - 1) + "^"
+    return [f"  {span.line:>5} | {line}", f"        | {caret}"]
+
+
+def _read_lines(file: str) -> list[str] | None:
+    try:
+        with Path(file).open(encoding="utf-8", errors="replace") as f:
+            return f.readlines()
+    except OSError:
+        return None
+
+
+def render_json(diagnostics: Sequence[Diagnostic]) -> str:
+    errors = sum(d.level is Severity.ERROR for d in diagnostics)
+    warnings = sum(d.level is Severity.WARNING for d in diagnostics)
+    payload = {
+        "diagnostics": [d.to_dict() for d in diagnostics],
+        "summary": {"errors": errors, "warnings": warnings},
+    }
+    return json.dumps(payload, indent=2, ensure_ascii=False) + "\n"
+
+
+def summary_line(diagnostics: Sequence[Diagnostic]) -> str:
+    errors = sum(d.level is Severity.ERROR for d in diagnostics)
+    warnings = sum(d.level is Severity.WARNING for d in diagnostics)
+    return f"{errors} error(s), {warnings} warning(s)"

@@ -1,0 +1,84 @@
+"""The raw model: the XMI element tree with types inferred, ids indexed and spans attached.
+
+It is deliberately generic (no UML semantics beyond type inference): `ir.build` gives it meaning.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from swarmgen.span import Span
+
+
+@dataclass(eq=False)
+class RawElement:
+    """One XMI element. `uml_type` is the `xmi:type` suffix, or inferred from the feature name."""
+
+    feature: str  # the element's local tag name: packagedElement, subvertex, region, ...
+    uml_type: str  # State, Transition, ... ('' when unknown)
+    id: str | None
+    attrs: dict[str, str]  # by local name, without the xmi: bookkeeping attributes
+    span: Span
+    text: str = ""  # stripped text content (bodies, languages)
+    children: list[RawElement] = field(default_factory=list)
+    parent: RawElement | None = None
+    # References given as child elements: feature -> ids (xmi:idref) or hrefs (file#id, pathmap://...).
+    child_refs: dict[str, list[str]] = field(default_factory=dict)
+
+    @property
+    def name(self) -> str:
+        return self.attrs.get("name", "")
+
+    def kids(self, feature: str | None = None, uml_type: str | None = None) -> Iterator[RawElement]:
+        for child in self.children:
+            if (feature is None or child.feature == feature) and (
+                uml_type is None or child.uml_type == uml_type
+            ):
+                yield child
+
+    def first(self, feature: str) -> RawElement | None:
+        return next(self.kids(feature), None)
+
+    def walk(self) -> Iterator[RawElement]:
+        stack: list[RawElement] = [self]
+        while stack:
+            element = stack.pop()
+            yield element
+            stack.extend(reversed(element.children))
+
+    def ref_values(self, feature: str) -> list[str]:
+        """References of one feature in any of XMI's three forms (attribute list, idref, href)."""
+        values = self.attrs.get(feature, "").split()
+        return values + self.child_refs.get(feature, [])
+
+
+@dataclass(frozen=True)
+class StereotypeApplication:
+    """A root-level `<Profile:Stereotype base_X="id" tag="..."/>` element."""
+
+    name: str  # local name of the stereotype (package-qualified names keep their last segment)
+    profile_uri: str
+    base_ids: tuple[str, ...]
+    tags: dict[str, str]
+    span: Span
+
+
+@dataclass
+class RawModel:
+    file: str
+    roots: list[RawElement]
+    index: dict[str, RawElement]
+    stereotypes: list[StereotypeApplication]
+    exporter: str  # "modelio", "eclipse-uml2", "papyrus", ... (informative)
+
+    def elements(self) -> Iterator[RawElement]:
+        for root in self.roots:
+            yield from root.walk()
+
+    def resolve(self, ref: str) -> RawElement | None:
+        """An element by id, or by the fragment of a same-file href (`model.xmi#_id`)."""
+        element = self.index.get(ref)
+        if element is None and "#" in ref:
+            element = self.index.get(ref.rsplit("#", 1)[1])
+        return element

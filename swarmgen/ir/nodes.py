@@ -1,0 +1,281 @@
+"""The intermediate representation: frozen pydantic models, every node with its source span.
+
+Names are the model's own; `ident` fields hold the safe identifier made from them once, in
+`ir.build`, so that every backend uses the same one. Collections are tuples, so the IR is
+hashable and comparable in tests. References between nodes are by `id` (the xmi:id).
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from swarmgen.ir.expr import Action, Binding, Expr
+from swarmgen.span import Span
+
+Value = bool | int | float | str | None
+
+DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
+
+
+class Node(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+# --- data
+
+
+class Property(Node):
+    """An attribute: member data, a hardware parameter, an event field, a behaviour parameter."""
+
+    id: str
+    name: str
+    ident: str
+    type: str | None = None  # primitive name (Real, Integer, String, Boolean) or data type name
+    default: Value = None
+    span: Span
+
+
+class DataType(Node):
+    id: str
+    name: str
+    ident: str
+    fields: tuple[Property, ...]
+    span: Span
+
+
+# --- swarm and hardware
+
+
+class HardwareKind(StrEnum):
+    SENSOR = "Sensor"
+    ACTUATOR = "Actuator"
+    CONTROLLER = "Controller"
+    COMMUNICATION_INTERFACE = "CommunicationInterface"
+
+
+class HardwareComponent(Node):
+    id: str
+    name: str
+    ident: str
+    kind: HardwareKind
+    generals: tuple[str, ...]  # names of the classes it specialises, directly
+    capabilities: tuple[str, ...]  # its own name and every ancestor's, sorted
+    parameters: tuple[Property, ...]
+    communication_type: str | None = None
+    communication_params: str | None = None
+    span: Span
+
+
+class Part(Node):
+    """A composite part: `uavs: UAV[4]` in a swarm, `sonar: SonarRangeFinder[4]` in a member."""
+
+    name: str
+    type_id: str
+    type_name: str
+    count: int
+    span: Span
+
+
+class MemberType(Node):
+    id: str
+    name: str
+    ident: str
+    role: str | None = None
+    hardware: tuple[Part, ...]
+    data: tuple[Property, ...]  # member data and parameters (attributes that are not parts)
+    machine: str | None  # id of its behaviour state machine
+    span: Span
+
+
+class Swarm(Node):
+    id: str
+    name: str
+    ident: str
+    members: tuple[Part, ...]
+    span: Span
+
+
+# --- behaviour library and events
+
+
+class BehaviourKind(StrEnum):
+    COMPLEX = "ComplexBehavior"
+    SWARM_BEHAVIOR = "SwarmBehavior"
+    SWARM_FUNCTION = "SwarmFunction"
+    HARDWARE_FUNCTION = "HardwareFunction"
+
+
+class RosBinding(Node):
+    kind: Literal["action", "service", "topic"]
+    name: str | None = None
+    type: str | None = None
+
+
+class Behaviour(Node):
+    id: str
+    name: str
+    ident: str
+    kind: BehaviourKind
+    library: str
+    inputs: tuple[Property, ...]
+    outputs: tuple[Property, ...]
+    outcomes: tuple[str, ...]
+    requires: tuple[str, ...]
+    ros: RosBinding | None = None
+    span: Span
+
+
+class Event(Node):
+    id: str
+    name: str
+    ident: str
+    fields: tuple[Property, ...]
+    sender: Literal["station", "member"] | None = None
+    scope: Literal["local", "swarm"] | None = None
+    swarm_event: bool  # stereotyped «SwarmEvent» (else a plain UML signal or event)
+    span: Span
+
+
+# --- state machines
+
+
+class OpaqueCode(Node):
+    """A body in a language swarmgen does not execute (Java, bean, ...): kept, reported."""
+
+    language: str
+    body: str
+    role: Literal["entry", "exit", "do", "effect"] = "effect"
+    span: Span
+
+
+class BehaviourCall(Node):
+    behaviour: str  # Behaviour.id
+    bindings: tuple[Binding, ...]
+    span: Span
+
+
+class PseudoKind(StrEnum):
+    INITIAL = "initial"
+    CHOICE = "choice"
+    JUNCTION = "junction"
+    FORK = "fork"
+    JOIN = "join"
+    SHALLOW_HISTORY = "shallowHistory"
+    DEEP_HISTORY = "deepHistory"
+    TERMINATE = "terminate"
+    ENTRY_POINT = "entryPoint"
+    EXIT_POINT = "exitPoint"
+
+
+class Pseudostate(Node):
+    type: Literal["pseudo"] = "pseudo"
+    id: str
+    name: str
+    kind: PseudoKind
+    span: Span
+
+
+class FinalState(Node):
+    type: Literal["final"] = "final"
+    id: str
+    name: str
+    span: Span
+
+
+class ConnectionRef(Node):
+    """A ConnectionPointReference on a submachine state: enters or leaves through its points."""
+
+    type: Literal["connection"] = "connection"
+    id: str
+    name: str
+    entry: tuple[str, ...]  # ids of entry points of the submachine
+    exit: tuple[str, ...]  # ids of exit points of the submachine
+    span: Span
+
+
+class State(Node):
+    type: Literal["state"] = "state"
+    id: str
+    name: str
+    regions: tuple[Region, ...] = ()
+    submachine: str | None = None  # Machine.id, inlined by the emitters
+    connection_points: tuple[Pseudostate, ...] = ()  # entry/exit points of a composite state
+    connections: tuple[ConnectionRef, ...] = ()
+    activity: BehaviourCall | None = None
+    entry: tuple[Action, ...] = ()
+    exit: tuple[Action, ...] = ()
+    opaque: tuple[OpaqueCode, ...] = ()
+    span: Span
+
+
+Vertex = Annotated[State | FinalState | Pseudostate, Field(discriminator="type")]
+
+
+class Region(Node):
+    id: str
+    name: str
+    vertices: tuple[Vertex, ...]
+    span: Span
+
+
+class TriggerKind(StrEnum):
+    EVENT = "event"  # a swarm event or signal
+    OUTCOME = "outcome"  # the outcome of the behaviour the source state runs
+    TIME = "time"  # `after` a delay
+    CALL = "call"  # a UML CallEvent, named after its operation
+    ANY = "any"
+
+
+class Trigger(Node):
+    kind: TriggerKind
+    name: str  # event or outcome name (the model's)
+    event: str | None = None  # Event.id when kind is EVENT
+    delay_ms: int | None = None
+    span: Span
+
+
+class Transition(Node):
+    id: str
+    name: str
+    source: str
+    target: str
+    triggers: tuple[Trigger, ...] = ()
+    guard: Expr | None = None
+    guard_text: str | None = None
+    effect: tuple[Action, ...] = ()
+    opaque: tuple[OpaqueCode, ...] = ()
+    kind: Literal["external", "internal", "local"] = "external"
+    span: Span
+
+
+class Machine(Node):
+    id: str
+    name: str
+    ident: str
+    owner: str | None  # id of the class that owns it (its context), if any
+    regions: tuple[Region, ...]
+    connection_points: tuple[Pseudostate, ...]
+    transitions: tuple[Transition, ...]
+    data: tuple[Property, ...]  # the context's attributes: member data guards may read
+    span: Span
+
+
+class Model(Node):
+    name: str
+    source: str
+    exporter: str
+    datatypes: tuple[DataType, ...]
+    hardware: tuple[HardwareComponent, ...]
+    member_types: tuple[MemberType, ...]
+    swarms: tuple[Swarm, ...]
+    behaviours: tuple[Behaviour, ...]
+    events: tuple[Event, ...]
+    machines: tuple[Machine, ...]
+    uses_profile: bool  # any swarm-profile stereotype applied: the stricter rules apply
+
+
+State.model_rebuild()
+Region.model_rebuild()

@@ -1,0 +1,148 @@
+"""Read-only queries over the IR shared by checks, emitters and backends."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from functools import cached_property
+
+from swarmgen.ir.nodes import (
+    Behaviour,
+    Event,
+    Machine,
+    MemberType,
+    Model,
+    Property,
+    Pseudostate,
+    Region,
+    State,
+    Transition,
+    Vertex,
+)
+
+
+@dataclass(frozen=True)
+class Placed:
+    """A vertex with the region that holds it and the state that holds that region."""
+
+    vertex: Vertex
+    region: Region | None  # None for a machine's or a state's connection points
+    parent: State | None  # None at a machine's top level
+
+
+def walk(machine: Machine) -> Iterator[Placed]:
+    """Every vertex of the machine (not of its submachines), parents before children."""
+    for point in machine.connection_points:
+        yield Placed(point, None, None)
+    for region in machine.regions:
+        yield from _walk_region(region, None)
+
+
+def _walk_region(region: Region, parent: State | None) -> Iterator[Placed]:
+    for vertex in region.vertices:
+        yield Placed(vertex, region, parent)
+        if isinstance(vertex, State):
+            for point in vertex.connection_points:
+                yield Placed(point, None, vertex)
+            for sub in vertex.regions:
+                yield from _walk_region(sub, vertex)
+
+
+class ModelIndex:
+    """Lookups by id, built once per model."""
+
+    def __init__(self, model: Model) -> None:
+        self.model = model
+        self.machines: dict[str, Machine] = {m.id: m for m in model.machines}
+        self.behaviours: dict[str, Behaviour] = {b.id: b for b in model.behaviours}
+        self.events: dict[str, Event] = {e.id: e for e in model.events}
+        self.events_by_name: dict[str, Event] = {}
+        for event in model.events:
+            self.events_by_name.setdefault(event.name, event)
+
+    def submachines(self, machine: Machine) -> list[str]:
+        return [
+            p.vertex.submachine
+            for p in walk(machine)
+            if isinstance(p.vertex, State) and p.vertex.submachine
+        ]
+
+    def reachable_machines(self, root: Machine) -> list[Machine]:
+        """The machine and every machine it uses as a submachine, transitively, cycle-safe."""
+        seen: dict[str, Machine] = {}
+        stack = [root]
+        while stack:
+            machine = stack.pop()
+            if machine.id in seen:
+                continue
+            seen[machine.id] = machine
+            stack.extend(
+                self.machines[s] for s in reversed(self.submachines(machine)) if s in self.machines
+            )
+        return list(seen.values())
+
+    @cached_property
+    def data_scope(self) -> dict[str, dict[str, Property]]:
+        """Member data visible in each machine: its context's attributes, the attributes of
+        every member type that runs it (directly or as a submachine), and behaviour outputs."""
+        scope: dict[str, dict[str, Property]] = {
+            m.id: {p.name: p for p in m.data} for m in self.model.machines
+        }
+        for member in self.model.member_types:
+            root = self.machines.get(member.machine or "")
+            if root is None:
+                continue
+            for machine in self.reachable_machines(root):
+                for prop in member.data:
+                    scope[machine.id].setdefault(prop.name, prop)
+        for machine in self.model.machines:
+            for behaviour in self.behaviours_of(machine):
+                for out in behaviour.outputs:
+                    scope[machine.id].setdefault(out.name, out)
+        return scope
+
+    def behaviours_of(self, machine: Machine) -> list[Behaviour]:
+        found = []
+        for placed in walk(machine):
+            vertex = placed.vertex
+            if isinstance(vertex, State) and vertex.activity is not None:
+                behaviour = self.behaviours.get(vertex.activity.behaviour)
+                if behaviour is not None:
+                    found.append(behaviour)
+        return found
+
+    def member_machines(self, member: MemberType) -> list[Machine]:
+        root = self.machines.get(member.machine or "")
+        return self.reachable_machines(root) if root is not None else []
+
+
+def vertices_by_id(machine: Machine) -> dict[str, Placed]:
+    return {p.vertex.id: p for p in walk(machine)}
+
+
+def connection_owner(machine: Machine) -> dict[str, State]:
+    """ConnectionPointReference id -> the submachine state that carries it."""
+    return {
+        c.id: p.vertex
+        for p in walk(machine)
+        if isinstance(p.vertex, State)
+        for c in p.vertex.connections
+    }
+
+
+def outgoing(machine: Machine) -> dict[str, list[Transition]]:
+    result: dict[str, list[Transition]] = {}
+    for transition in machine.transitions:
+        result.setdefault(transition.source, []).append(transition)
+    return result
+
+
+def incoming(machine: Machine) -> dict[str, list[Transition]]:
+    result: dict[str, list[Transition]] = {}
+    for transition in machine.transitions:
+        result.setdefault(transition.target, []).append(transition)
+    return result
+
+
+def initial_of(region: Region) -> list[Pseudostate]:
+    return [v for v in region.vertices if isinstance(v, Pseudostate) and v.kind == "initial"]

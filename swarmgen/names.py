@@ -1,0 +1,83 @@
+"""Safe, deterministic identifiers derived from model names.
+
+Model names may hold spaces and any Unicode ("Select Rover"); generated code, SCXML ids and ROS
+names need identifiers. The original names are always kept beside them (SCXML attributes,
+traces). One function makes identifiers, so every backend agrees on them.
+"""
+
+from __future__ import annotations
+
+import keyword
+import re
+import unicodedata
+from collections.abc import Iterable
+
+# Words that may not be used as identifiers in any target: Python, ECMAScript (Qt SCXML's
+# datamodel), SCXML's system variables and the names generated code reserves.
+_RESERVED = frozenset(keyword.kwlist) | frozenset(keyword.softkwlist) | {
+    "abstract", "arguments", "await", "boolean", "break", "byte", "case", "catch", "char", "class",
+    "const", "continue", "debugger", "default", "delete", "do", "double", "else", "enum", "eval",
+    "export", "extends", "false", "final", "finally", "float", "for", "function", "goto", "if",
+    "implements", "import", "in", "instanceof", "int", "interface", "let", "long", "native", "new",
+    "null", "package", "private", "protected", "public", "return", "short", "static", "super",
+    "switch", "synchronized", "this", "throw", "throws", "transient", "true", "try", "typeof",
+    "undefined", "var", "void", "volatile", "while", "with", "yield", "NaN", "Infinity",
+    "In", "_event", "_sessionid", "_name", "_ioprocessors", "_x",
+    "event", "outcome", "done", "error", "self", "sg",
+}  # fmt: skip
+
+_NON_WORD = re.compile(r"[^0-9A-Za-z_]+")
+_UNDERSCORES = re.compile(r"_{2,}")
+MAX_LENGTH = 80
+
+
+def identifier(name: str, fallback: str = "unnamed") -> str:
+    """A safe ASCII identifier for `name`: `Select Rover` -> `Select_Rover`.
+
+    Accents are stripped, other characters become `_`, runs of `_` collapse (so `__` stays free
+    as the separator of qualified ids), reserved words get a trailing `_`.
+    """
+    ascii_text = unicodedata.normalize("NFKD", name).encode("ascii", "ignore").decode("ascii")
+    text = _UNDERSCORES.sub("_", _NON_WORD.sub("_", ascii_text)).strip("_")
+    if not text:
+        text = fallback
+    if text[0].isdigit():
+        text = f"n{text}"
+    if len(text) > MAX_LENGTH:
+        text = text[:MAX_LENGTH].rstrip("_")
+    if text in _RESERVED:
+        text = f"{text}_"
+    return text
+
+
+def qualified(*parts: str) -> str:
+    """Join identifiers of nested elements: `Mission__SarBehavior__Idle`."""
+    return "__".join(p for p in parts if p)
+
+
+def ros_name(name: str) -> str:
+    """A ROS 2 name segment: lower snake case (`SelectRover` -> `select_rover`)."""
+    snake = re.sub(r"(?<=[a-z0-9])(?=[A-Z])", "_", identifier(name)).lower()
+    return _UNDERSCORES.sub("_", snake).strip("_") or "unnamed"
+
+
+class IdAllocator:
+    """Hands out unique ids in one namespace, in the order asked; deterministic."""
+
+    def __init__(self, taken: Iterable[str] = ()) -> None:
+        self._taken = set(taken)
+
+    def claim(self, preferred: str, *alternatives: str) -> str:
+        for candidate in (preferred, *alternatives):
+            if candidate and candidate not in self._taken:
+                self._taken.add(candidate)
+                return candidate
+        base = alternatives[-1] if alternatives else preferred
+        n = 2
+        while f"{base}_{n}" in self._taken:
+            n += 1
+        self._taken.add(f"{base}_{n}")
+        return f"{base}_{n}"
+
+    def __contains__(self, name: str) -> bool:
+        return name in self._taken

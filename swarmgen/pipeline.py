@@ -1,0 +1,159 @@
+"""One function per command, wiring the stages: load -> build -> check -> emit -> write.
+
+Nothing below this module prints or writes files. The CLI and the tests both call these.
+"""
+
+from __future__ import annotations
+
+import difflib
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+
+from swarmgen import __version__, check
+from swarmgen import diagnostics as dg
+from swarmgen.diagnostics import Diagnostic
+from swarmgen.frontend import load
+from swarmgen.ir.build import build
+from swarmgen.ir.nodes import Model
+from swarmgen.scxml.emit import emit
+
+MANIFEST = ".swarmgen.json"
+Files = dict[PurePosixPath, str]
+
+
+@dataclass(frozen=True)
+class Validation:
+    model: Model | None
+    diagnostics: list[Diagnostic]
+
+    @property
+    def exit_code(self) -> dg.ExitCode:
+        return dg.exit_code_for(self.diagnostics)
+
+
+@dataclass(frozen=True)
+class Compilation:
+    validation: Validation
+    files: Files  # relative path -> text; empty when the model has errors
+
+
+def validate(path: Path) -> Validation:
+    """Load, build and check one model; stops after the first stage that reports errors."""
+    raw, found = load(path)
+    if raw is None or dg.has_errors(found):
+        return Validation(None, dg.normalise(found))
+    model, built = build(raw)
+    found += built
+    if not dg.has_errors(found):
+        found += check.run(model)
+    return Validation(model, dg.normalise(found))
+
+
+def compile_model(path: Path) -> Compilation:
+    validation = validate(path)
+    if validation.model is None or dg.has_errors(validation.diagnostics):
+        return Compilation(validation, {})
+    files: Files = {}
+    for document in emit(validation.model):
+        files[PurePosixPath("scxml", f"{document.name}.scxml")] = document.text
+    files[PurePosixPath(MANIFEST)] = _manifest(path, files)
+    return Compilation(validation, files)
+
+
+def _manifest(source: Path, files: Mapping[PurePosixPath, str]) -> str:
+    digests = {str(p): hashlib.sha256(t.encode()).hexdigest() for p, t in sorted(files.items())}
+    payload = {
+        "generator": "swarmgen",
+        "version": __version__,
+        "source": source.name,
+        "files": digests,
+    }
+    return json.dumps(payload, indent=2, sort_keys=True) + "\n"
+
+
+class OutputError(Exception):
+    """The output directory cannot be written safely."""
+
+
+def write_tree(files: Files, out_dir: Path) -> None:
+    """Replace `out_dir` with exactly `files`, atomically: a temporary sibling, then renames.
+
+    A directory we did not create (no manifest) is never replaced, so `-o .` cannot wipe a
+    project; paths are checked to stay inside the output directory.
+    """
+    out_dir = out_dir.absolute()
+    _check_replaceable(out_dir)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
+    try:
+        for relative, text in sorted(files.items()):
+            target = (staging / relative).resolve()
+            if not target.is_relative_to(staging.resolve()):
+                raise OutputError(f"refusing to write outside the output directory: {relative}")
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_bytes(text.encode("utf-8"))
+        _swap(staging, out_dir)
+    except BaseException:
+        shutil.rmtree(staging, ignore_errors=True)
+        raise
+
+
+def _check_replaceable(out_dir: Path) -> None:
+    if not out_dir.exists():
+        return
+    if not out_dir.is_dir():
+        raise OutputError(f"{out_dir} exists and is not a directory")
+    if any(out_dir.iterdir()) and not (out_dir / MANIFEST).is_file():
+        raise OutputError(
+            f"{out_dir} is not empty and was not written by swarmgen (no {MANIFEST}); "
+            "choose an empty or new directory"
+        )
+
+
+def _swap(staging: Path, out_dir: Path) -> None:
+    if not out_dir.exists():
+        os.replace(staging, out_dir)
+        return
+    retired = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old.", dir=out_dir.parent))
+    os.replace(out_dir, retired / "tree")
+    os.replace(staging, out_dir)
+    shutil.rmtree(retired, ignore_errors=True)
+
+
+def diff_tree(files: Files, out_dir: Path) -> str:
+    """Unified diff between what would be generated and what `out_dir` holds ('' if equal)."""
+    on_disk: dict[PurePosixPath, str] = {}
+    if out_dir.is_dir():
+        for path in sorted(out_dir.rglob("*")):
+            if path.is_file():
+                on_disk[PurePosixPath(path.relative_to(out_dir).as_posix())] = path.read_text(
+                    encoding="utf-8", errors="replace"
+                )
+    chunks: list[str] = []
+    for relative in sorted(set(files) | set(on_disk)):
+        old, new = on_disk.get(relative), files.get(relative)
+        if old == new:
+            continue
+        chunks.extend(
+            difflib.unified_diff(
+                (old or "").splitlines(keepends=True),
+                (new or "").splitlines(keepends=True),
+                fromfile=f"a/{relative}" if old is not None else "/dev/null",
+                tofile=f"b/{relative}" if new is not None else "/dev/null",
+            )
+        )
+    return "".join(chunks)
+
+
+def ir_schema() -> str:
+    """The IR's JSON Schema, deterministic (sorted keys)."""
+    schema = Model.model_json_schema()
+    schema["$id"] = "urn:swarmgen:ir:schema"
+    schema["title"] = f"swarmgen IR (swarmgen {__version__.split('.')[0]}.x)"
+    return json.dumps(schema, indent=2, sort_keys=True, ensure_ascii=False) + "\n"
