@@ -21,7 +21,8 @@ from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend import load
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
-from swarmgen.scxml.emit import emit
+from swarmgen.render import render
+from swarmgen.scxml.emit import ScxmlDocument, emit
 
 MANIFEST = ".swarmgen.json"
 Files = dict[PurePosixPath, str]
@@ -60,10 +61,45 @@ def compile_model(path: Path) -> Compilation:
     if validation.model is None or dg.has_errors(validation.diagnostics):
         return Compilation(validation, {})
     files: Files = {}
-    for document in emit(validation.model):
+    documents = emit(validation.model)
+    for document in documents:
         files[PurePosixPath("scxml", f"{document.name}.scxml")] = document.text
+    files[PurePosixPath("README.md")] = _output_readme(validation.model, path, documents)
     files[PurePosixPath(MANIFEST)] = _manifest(path, files)
     return Compilation(validation, files)
+
+
+def _md(text: str) -> str:
+    """Model names inside a Markdown table: no pipes, backticks or line breaks."""
+    return " ".join(text.replace("|", "/").replace("`", "'").split())
+
+
+def _output_readme(model: Model, source: Path, documents: tuple[ScxmlDocument, ...]) -> str:
+    swarms = [
+        {
+            "name": _md(s.name),
+            "members": [{"count": p.count, "type": _md(p.type_name)} for p in s.members],
+        }
+        for s in model.swarms
+    ]
+    rows = [
+        {
+            "path": f"scxml/{d.name}.scxml",
+            "member": _md(d.member or "-"),
+            "machine": _md(d.machine),
+            "states": d.states,
+            "transitions": d.transitions,
+        }
+        for d in documents
+    ]
+    return render(
+        "common/README.md.j2",
+        version=__version__,
+        source=_md(source.name),
+        model=_md(model.name),
+        swarms=swarms,
+        documents=rows,
+    )
 
 
 def _manifest(source: Path, files: Mapping[PurePosixPath, str]) -> str:

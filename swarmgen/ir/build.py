@@ -685,11 +685,8 @@ def _short(text: str, limit: int = 60) -> str:
 
 
 def _quote_error(text: str, err: expr.ExprError) -> str:
-    line = (
-        text.splitlines()[err.line]
-        if text.splitlines() and err.line < len(text.splitlines())
-        else text
-    )
+    lines = text.split("\n")  # ExprError counts lines by "\n" only
+    line = lines[err.line] if err.line < len(lines) else text
     return f"{_short(line)}: {err.message} (column {err.col + 1})"
 
 

@@ -343,7 +343,7 @@ class _Lexer:
         while True:
             if i >= len(self.text) or self.text[i] == "\n":
                 self.fail(start, "unterminated string", hint=f"close it with {quote}")
-            c = self.text[i]
+            at, c = i, self.text[i]
             if c == quote:
                 break
             if c == "\\":
@@ -351,7 +351,7 @@ class _Lexer:
             else:
                 i += 1
             if 0xD800 <= ord(c) <= 0xDFFF:
-                self.fail(i - 1, "strings must not contain lone surrogates")
+                self.fail(at, "strings must not contain lone surrogates")
             chars.append(c)
         self.tokens.append(_Tok("str", self.text[start : i + 1], start, "".join(chars)))
         return i + 1

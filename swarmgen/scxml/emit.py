@@ -64,6 +64,8 @@ _TRANSIENT = {
 }
 _HISTORY = {PseudoKind.SHALLOW_HISTORY, PseudoKind.DEEP_HISTORY}
 
+_STATE_TAGS = ("state", "parallel", "final", "history")
+
 Instance = tuple[str, ...]  # ids of the submachine states that lead to a machine's copy
 Key = tuple[Instance, str]  # one copy of one vertex
 
@@ -74,6 +76,8 @@ class ScxmlDocument:
     member: str | None  # member type name, if the document is a member's behaviour
     machine: str  # root machine name
     text: str
+    states: int  # <state>, <parallel>, <final> and <history> elements
+    transitions: int
 
 
 def emit(model: Model) -> tuple[ScxmlDocument, ...]:
@@ -173,8 +177,10 @@ class _Emitter:
             comment, encoding="unicode"
         )
         text = header + "\n" + body
-        machine_name = self.root.name
-        return ScxmlDocument(name, self.member.name if self.member else None, machine_name, text)
+        states = sum(1 for e in scxml.iter(*(f"{{{SCXML_NS}}}{t}" for t in _STATE_TAGS)))
+        transitions = sum(1 for _ in scxml.iter(f"{{{SCXML_NS}}}transition"))
+        member = self.member.name if self.member else None
+        return ScxmlDocument(name, member, self.root.name, text, states, transitions)
 
     def _collect_data(self) -> None:
         for machine in self.index.reachable_machines(self.root):

@@ -1,0 +1,114 @@
+"""Shared fixtures: paths, the W3C SCXML schema, the Qt SCXML engine and the golden-file flag."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+from collections.abc import Iterable
+from pathlib import Path
+
+import pytest
+import xmlschema
+
+ROOT = Path(__file__).resolve().parent.parent
+SHARED = ROOT.parent / "shared"
+XMI_SAMPLES = SHARED / "reference" / "xmi_samples"
+SCXML_XSD = SHARED / "reference" / "scxml_xsd"
+SAMPLE_MODELS = sorted(ROOT.glob("sample_models/*/*.xmi"))
+SYSTEM_PYTHON = "/usr/bin/python3"
+QT_SCRIPT = ROOT / "swarmgen" / "scxml" / "qt_script.py"
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--update-golden",
+        action="store_true",
+        help="rewrite tests/golden/ from the current output (review the diff before committing)",
+    )
+
+
+@pytest.fixture(scope="session")
+def update_golden(request: pytest.FixtureRequest) -> bool:
+    return bool(request.config.getoption("--update-golden"))
+
+
+def xmi_sample_files() -> list[Path]:
+    return sorted(p for p in XMI_SAMPLES.iterdir() if p.suffix in {".xmi", ".uml"})
+
+
+@pytest.fixture(scope="session")
+def scxml_schema() -> xmlschema.XMLSchema:
+    if not (SCXML_XSD / "scxml.xsd").is_file():
+        pytest.fail(
+            f"the W3C SCXML schema is missing: {SCXML_XSD} (../shared must be beside the repo)"
+        )
+    return xmlschema.XMLSchema(
+        str(SCXML_XSD / "scxml.xsd"),
+        uri_mapper={"http://www.w3.org/2001/xml.xsd": str(SCXML_XSD / "xml.xsd")},
+    )
+
+
+def qt_load(paths: Iterable[Path]) -> list[dict[str, object]]:
+    """Load SCXML files in Qt SCXML (system python3 + PySide2), start them, report errors."""
+    files = [str(p) for p in paths]
+    env = {k: v for k, v in os.environ.items() if not k.startswith("_ROS_WHEELS")}
+    env["QT_QPA_PLATFORM"] = "offscreen"
+    completed = subprocess.run(
+        [SYSTEM_PYTHON, str(QT_SCRIPT), "load", *files],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        check=False,
+    )
+    assert completed.returncode == 0, completed.stderr
+    return [json.loads(line) for line in completed.stdout.splitlines() if line.strip()]
+
+
+@pytest.fixture(scope="session")
+def qt_available() -> None:
+    probe = subprocess.run(
+        [SYSTEM_PYTHON, "-c", "import PySide2.QtScxml"], capture_output=True, check=False
+    )
+    if probe.returncode != 0:
+        pytest.fail(
+            "Qt SCXML is not installed: run `make sysdeps` (Debian python3-pyside2.qtscxml)"
+        )
+
+
+def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "swarmgen", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd or ROOT,
+        timeout=120,
+        check=False,
+    )
+
+
+def which(name: str) -> str | None:
+    return shutil.which(name)
+
+
+def qt_run(
+    path: Path, steps: list[tuple[str, dict[str, object] | None]]
+) -> list[dict[str, object]]:
+    """Run one SCXML document in Qt SCXML through `steps`; one report per step (start first)."""
+    env = {k: v for k, v in os.environ.items() if not k.startswith("_ROS_WHEELS")}
+    env["QT_QPA_PLATFORM"] = "offscreen"
+    completed = subprocess.run(
+        [SYSTEM_PYTHON, str(QT_SCRIPT), "run", str(path), json.dumps(steps)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+        check=False,
+    )
+    assert completed.returncode == 0, completed.stderr
+    reports = [json.loads(line) for line in completed.stdout.splitlines() if line.strip()]
+    assert reports and "errors" not in reports[0], reports[:1]
+    return reports

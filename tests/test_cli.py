@@ -1,0 +1,149 @@
+"""The `swarmgen` command line: exit codes, output streams, atomic writes, --check, determinism."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from swarmgen import pipeline
+from tests.conftest import ROOT, SAMPLE_MODELS, run_cli
+
+SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
+
+
+def test_validate_clean_model_exits_0() -> None:
+    result = run_cli("validate", str(SAR))
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""
+    assert "0 error(s), 0 warning(s)" in result.stderr
+
+
+def test_validate_json_format(tmp_path: Path) -> None:
+    broken = tmp_path / "broken.xmi"
+    broken.write_text(
+        SAR.read_text(encoding="utf-8").replace('value="altitude = altitude"', 'value="x"')
+    )
+    text = SAR.read_text(encoding="utf-8")
+    # a trigger event that does not exist: a dangling reference
+    first_event = text.index(' event="') + len(' event="')
+    event_id = text[first_event : text.index('"', first_event)]
+    broken.write_text(text.replace(f' event="{event_id}"', ' event="_doesNotExist0000000000"', 1))
+    result = run_cli("validate", str(broken), "--format", "json")
+    assert result.returncode == 1
+    payload = json.loads(result.stdout)
+    codes = {d["code"] for d in payload["diagnostics"]}
+    assert "SG011" in codes
+    (dangling,) = [d for d in payload["diagnostics"] if d["code"] == "SG011"]
+    assert dangling["file"] == str(broken) and dangling["line"] > 0 and dangling["col"] > 0
+    assert payload["summary"]["errors"] >= 1
+
+
+def test_text_diagnostic_format(tmp_path: Path) -> None:
+    broken = tmp_path / "model.xmi"
+    text = SAR.read_text(encoding="utf-8")
+    broken.write_text(
+        text.replace('<subvertex xmi:type="uml:Pseudostate"', '<subvertex xmi:type="uml:State"', 1)
+    )
+    result = run_cli("validate", str(broken))
+    assert result.returncode == 1
+    first = result.stdout.splitlines()[0]
+    # model.xmi:42:7: error: ... [SG101]
+    location, severity, rest = first.split(": ", 2)
+    path, line, col = location.rsplit(":", 2)
+    assert path == str(broken) and int(line) > 0 and int(col) > 0
+    assert severity == "error" and rest.endswith("]") and "[SG" in rest
+    assert "  in: " in result.stdout and "  hint: " in result.stdout
+
+
+def test_misuse_exits_2() -> None:
+    assert run_cli("compile", str(SAR)).returncode == 2  # missing -o
+    assert run_cli("frobnicate").returncode == 2
+
+
+def test_compile_writes_tree_and_check_detects_drift(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    result = run_cli("compile", str(SAR), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert result.stdout == ""  # progress goes to stderr
+    assert sorted(p.name for p in (out / "scxml").iterdir()) == ["UAV.scxml", "UGV.scxml"]
+    manifest = json.loads((out / pipeline.MANIFEST).read_text())
+    assert manifest["source"] == "sar.xmi" and "scxml/UAV.scxml" in manifest["files"]
+    assert run_cli("compile", str(SAR), "-o", str(out), "--check").returncode == 0
+
+    uav = out / "scxml" / "UAV.scxml"
+    uav.write_text(uav.read_text().replace('id="Loitering"', 'id="Hovering"'))
+    (out / "scxml" / "extra.scxml").write_text("<scxml/>")
+    stale = run_cli("compile", str(SAR), "-o", str(out), "--check")
+    assert stale.returncode == 1
+    lines = stale.stdout.splitlines()
+    assert any(line.startswith("-") and '<state id="Hovering"' in line for line in lines)
+    assert any(line.startswith("+") and '<state id="Loitering"' in line for line in lines)
+    assert "b/scxml/extra.scxml" not in stale.stdout and "a/scxml/extra.scxml" in stale.stdout
+    assert 'id="Hovering"' in uav.read_text()  # --check writes nothing
+
+    assert run_cli("compile", str(SAR), "-o", str(out)).returncode == 0
+    assert not (out / "scxml" / "extra.scxml").exists()
+    assert 'id="Hovering"' not in uav.read_text()
+
+
+def test_compile_refuses_to_replace_a_foreign_directory(tmp_path: Path) -> None:
+    precious = tmp_path / "project"
+    precious.mkdir()
+    (precious / "notes.txt").write_text("keep me")
+    result = run_cli("compile", str(SAR), "-o", str(precious))
+    assert result.returncode == 2
+    assert "was not written by swarmgen" in result.stderr
+    assert (precious / "notes.txt").read_text() == "keep me"
+    assert sorted(p.name for p in precious.iterdir()) == ["notes.txt"]
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no staging left over
+
+
+@pytest.mark.parametrize("model", SAMPLE_MODELS, ids=[m.parent.name for m in SAMPLE_MODELS])
+def test_generated_directory_is_current(model: Path) -> None:
+    """CI fails when generated/ is stale: regenerate with `make demo`."""
+    result = run_cli(
+        "compile", str(model.relative_to(ROOT)), "-o", f"generated/{model.parent.name}", "--check"
+    )
+    assert result.returncode == 0, f"generated/ is stale, run `make demo`:\n{result.stdout[:4000]}"
+
+
+def test_output_is_byte_identical_across_hash_seeds(tmp_path: Path) -> None:
+    outputs = []
+    for seed in ("0", "1", "12345"):
+        out = tmp_path / f"out{seed}"
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        completed = subprocess.run(
+            [sys.executable, "-m", "swarmgen", "compile", str(SAR), "-o", str(out)],
+            env=env, capture_output=True, check=False, cwd=ROOT,
+        )  # fmt: skip
+        assert completed.returncode == 0
+        outputs.append(
+            {p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()}
+        )
+    assert outputs[0] == outputs[1] == outputs[2]
+
+
+def test_schema_is_current() -> None:
+    """schemas/ir.schema.json matches the IR; regenerate with `make schema`."""
+    result = run_cli("schema", "-o", "schemas", "--check")
+    assert result.returncode == 0, result.stderr
+    schema = json.loads((ROOT / "schemas" / "ir.schema.json").read_text())
+    assert {"Machine", "State", "Transition", "Behaviour", "Event"} <= set(schema["$defs"])
+
+
+def test_schema_check_fails_when_stale(tmp_path: Path) -> None:
+    (tmp_path / "ir.schema.json").write_text("{}\n")
+    assert run_cli("schema", "-o", str(tmp_path), "--check").returncode == 1
+    assert run_cli("schema", "-o", str(tmp_path)).returncode == 0
+    assert run_cli("schema", "-o", str(tmp_path), "--check").returncode == 0
+
+
+def test_version_and_help() -> None:
+    assert "swarmgen" in run_cli("--version").stdout
+    help_text = run_cli("--help").stdout
+    assert all(cmd in help_text for cmd in ("validate", "compile", "schema"))
