@@ -147,3 +147,11 @@ def test_version_and_help() -> None:
     assert "swarmgen" in run_cli("--version").stdout
     help_text = run_cli("--help").stdout
     assert all(cmd in help_text for cmd in ("validate", "compile", "schema"))
+
+
+def test_every_diagnostic_code_is_documented() -> None:
+    from swarmgen.diagnostics import CODES
+
+    doc = (ROOT / "docs" / "diagnostics.md").read_text()
+    missing = [c.id for c in CODES.values() if f"| {c.id} | `{c.name}` |" not in doc]
+    assert not missing, f"add these codes to docs/diagnostics.md: {missing}"

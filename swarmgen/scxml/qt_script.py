@@ -14,8 +14,8 @@ import sys
 
 def _load(paths: list[str]) -> None:
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
-    from PySide2.QtCore import QCoreApplication  # type: ignore[import-not-found]
-    from PySide2.QtScxml import QScxmlStateMachine  # type: ignore[import-not-found]
+    from PySide2.QtCore import QCoreApplication
+    from PySide2.QtScxml import QScxmlStateMachine
 
     app = QCoreApplication.instance() or QCoreApplication([])
     for path in paths:
@@ -37,8 +37,8 @@ def _settle(app: object, rounds: int = 10) -> None:
 
 def _run(path: str, steps: list[list[object]]) -> None:
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
-    from PySide2.QtCore import QCoreApplication  # type: ignore[import-not-found]
-    from PySide2.QtScxml import QScxmlStateMachine  # type: ignore[import-not-found]
+    from PySide2.QtCore import QCoreApplication
+    from PySide2.QtScxml import QScxmlStateMachine
 
     app = QCoreApplication.instance() or QCoreApplication([])
     machine = QScxmlStateMachine.fromFile(path)
