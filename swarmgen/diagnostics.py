@@ -227,8 +227,15 @@ def _excerpt(span: Span, sources: dict[str, list[str] | None]) -> list[str]:
     line = text[span.line - 1].rstrip("\n")
     if len(line) > 160:
         line = line[:157] + "..."
+    line = _printable(line)
     caret = " " * (max(span.col, 1) - 1) + "^"
     return [f"  {span.line:>5} | {line}", f"        | {caret}"]
+
+
+def _printable(line: str) -> str:
+    """A source line safe to print: control and invisible characters (terminal escapes, bidi
+    overrides, the bytes of a binary file) become U+FFFD, one for one, so the caret stays put."""
+    return "".join(c if c.isprintable() or c == "\t" else "\ufffd" for c in line)
 
 
 def _read_lines(file: str) -> list[str] | None:

@@ -7,6 +7,7 @@ children or `href`s. Safe: no DTDs, entities, network or XInclude; size and dept
 
 from __future__ import annotations
 
+import codecs
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -118,28 +119,68 @@ def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
         huge_tree=False,
         remove_blank_text=False,
     )
-    head = data[:4096].lstrip()
-    if b"<!DOCTYPE" in head or b"<!ENTITY" in data:
-        raise InputError(
-            dg.diag(
-                dg.FORBIDDEN_XML,
-                "document type declarations and entities are not allowed in model files",
-                Span(file=shown, line=_line_of(data, b"<!"), col=1),
-                hint="XMI exports never need a DTD; remove the <!DOCTYPE ...> block",
-            )
-        )
+    text = _ascii_compatible(data)  # UTF-16/32 would hide "<!ENTITY" from a byte search
+    head = text[:4096].lstrip()
+    if b"<!DOCTYPE" in head or b"<!ENTITY" in text:
+        raise InputError(_forbidden_dtd(shown, _line_of(text, b"<!")))
     try:
-        return etree.ElementTree(etree.fromstring(data, parser))
+        tree = etree.ElementTree(etree.fromstring(data, parser))
     except etree.XMLSyntaxError as err:
-        line, col = err.position or (0, 0)
-        message = str(err.msg or err).split(" (line")[0]
+        line, col = err.position or (0, 0)  # libxml2 columns are 1-based already
+        message = _POSITION_SUFFIX.sub("", str(err.msg or err).split(" (line")[0])
         raise InputError(
             dg.diag(
                 dg.NOT_XML,
                 f"not well-formed XML: {message}",
-                Span(file=shown, line=line, col=col + 1),
+                Span(file=shown, line=line, col=max(col, 1)),
             )
         ) from None
+    if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:  # a DOCTYPE past the head
+        raise InputError(_forbidden_dtd(shown, _line_of(text, b"<!DOCTYPE")))
+    for namespace in _XINCLUDE_NAMESPACES:
+        include = next(tree.getroot().iter(f"{{{namespace}}}*"), None)
+        if include is not None:
+            raise InputError(
+                dg.diag(
+                    dg.FORBIDDEN_XML,
+                    "XInclude is not allowed in model files; the included file is not read",
+                    Span(file=shown, line=_line(include) or 1, col=1),
+                    hint="remove the xi:include element; a model is exported as one file",
+                )
+            )
+    return tree
+
+
+_POSITION_SUFFIX = re.compile(r", line \d+, column \d+$")
+_XINCLUDE_NAMESPACES = ("http://www.w3.org/2001/XInclude", "http://www.w3.org/2003/XInclude")
+# XML in UTF-16/32, recognised by its byte order mark or its first character '<' (XML 1.0 F.1).
+_WIDE_ENCODINGS = (
+    (codecs.BOM_UTF32_LE, "utf-32"),
+    (codecs.BOM_UTF32_BE, "utf-32"),
+    (codecs.BOM_UTF16_LE, "utf-16"),
+    (codecs.BOM_UTF16_BE, "utf-16"),
+    (b"<\x00\x00\x00", "utf-32-le"),
+    (b"\x00\x00\x00<", "utf-32-be"),
+    (b"<\x00", "utf-16-le"),
+    (b"\x00<", "utf-16-be"),
+)
+
+
+def _ascii_compatible(data: bytes) -> bytes:
+    """The document re-encoded as UTF-8 if it is in UTF-16/32; otherwise unchanged."""
+    for prefix, codec in _WIDE_ENCODINGS:
+        if data.startswith(prefix):
+            return data.decode(codec, errors="replace").encode("utf-8")
+    return data
+
+
+def _forbidden_dtd(shown: str, line: int) -> Diagnostic:
+    return dg.diag(
+        dg.FORBIDDEN_XML,
+        "document type declarations and entities are not allowed in model files",
+        Span(file=shown, line=line, col=1),
+        hint="XMI exports never need a DTD; remove the <!DOCTYPE ...> block",
+    )
 
 
 def _line_of(data: bytes, needle: bytes) -> int:
