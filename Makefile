@@ -45,8 +45,8 @@ check-generated: $(STAMP)
 test: lint typecheck pytest
 
 lint: $(STAMP)
-	$(BIN)/ruff check swarmgen tests benchmarks
-	$(BIN)/ruff format --check swarmgen tests benchmarks
+	$(BIN)/ruff check swarmgen tests $(wildcard benchmarks)
+	$(BIN)/ruff format --check swarmgen tests $(wildcard benchmarks)
 
 typecheck: $(STAMP)
 	$(BIN)/mypy

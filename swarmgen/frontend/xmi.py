@@ -135,7 +135,7 @@ def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
                 Span(file=shown, line=line, col=max(col, 1)),
             )
         ) from None
-    if tree.docinfo.doctype or tree.docinfo.internalDTD is not None:  # a DOCTYPE past the head
+    if tree.docinfo.internalDTD is not None:  # a DOCTYPE past the first 4 KiB
         raise InputError(_forbidden_dtd(shown, _line_of(text, b"<!DOCTYPE")))
     for namespace in _XINCLUDE_NAMESPACES:
         include = next(tree.getroot().iter(f"{{{namespace}}}*"), None)
