@@ -1,0 +1,182 @@
+"""The lowered statechart: one member's machine with submachines inlined, pseudostates resolved
+and every id, event descriptor and action decided. Every output (SCXML, smach, rclpy, asyncio) is
+rendered from this one structure, so they agree on structure and names by construction.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from swarmgen.ir import expr
+from swarmgen.ir.nodes import Value
+
+NodeKind = Literal["state", "parallel", "final", "history"]
+
+
+@dataclass(frozen=True, slots=True)
+class Assign:
+    location: str  # data id
+    value: expr.Expr
+
+
+@dataclass(frozen=True, slots=True)
+class WriteBack:
+    """`location = event.data[field]` when the outcome event carries it (behaviour outputs)."""
+
+    location: str
+    field: str
+
+
+@dataclass(frozen=True, slots=True)
+class Param:
+    name: str  # identifier
+    value: expr.Expr
+
+
+@dataclass(frozen=True, slots=True)
+class Raise:
+    """An event for this member only (internal queue)."""
+
+    event: str
+    params: tuple[Param, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class Send:
+    """An event to the rest of the swarm."""
+
+    event: str
+    params: tuple[Param, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
+class Opaque:
+    """Code in a foreign language: kept for readers, never executed."""
+
+    language: str
+    text: str
+
+
+Action = Assign | WriteBack | Raise | Send | Opaque
+
+
+@dataclass(frozen=True, slots=True)
+class Arg:
+    name: str  # input identifier
+    value: expr.Expr
+    implicit: bool  # read from member data of the same name (no binding in the model)
+
+
+@dataclass(frozen=True, slots=True)
+class Call:
+    """The library behaviour a state runs while it is active."""
+
+    behaviour: str  # model name
+    ident: str
+    kind: str  # ComplexBehavior, SwarmBehavior, SwarmFunction, HardwareFunction
+    args: tuple[Arg, ...]
+    results: tuple[tuple[str, str], ...]  # (output identifier, data id it is written to)
+
+
+@dataclass(frozen=True, slots=True)
+class Timer:
+    event: str
+    delay_ms: int
+
+
+@dataclass(frozen=True, slots=True)
+class Transition:
+    events: tuple[str, ...]  # SCXML event descriptors; empty: eventless
+    targets: tuple[str, ...]  # node ids; empty: targetless (internal transition of UML)
+    cond: expr.Expr | None = None
+    in_states: tuple[str, ...] = ()  # join: all of these must be active (ANDed with cond)
+    internal: bool = False  # SCXML type="internal" (UML local transition)
+    actions: tuple[Action, ...] = ()
+    name: str | None = None  # the model's transition name, when meaningful
+    join: str | None = None  # the join pseudostate this transition stands for
+
+
+@dataclass(frozen=True, slots=True)
+class Node:
+    id: str
+    kind: NodeKind
+    name: str | None = None  # the model's name
+    children: tuple[Node, ...] = ()
+    initial: Transition | None = None  # <initial> of a compound state, default of a history
+    history: Literal["shallow", "deep"] | None = None
+    onentry: tuple[Action, ...] = ()
+    onexit: tuple[Action, ...] = ()
+    call: Call | None = None
+    timers: tuple[Timer, ...] = ()
+    transitions: tuple[Transition, ...] = ()
+    region: str | None = None  # the model's region name (a region of a parallel state)
+    submachine: str | None = None  # name of the inlined machine
+    pseudostate: str | None = None  # choice, junction, fork, entryPoint, ... (transient states)
+
+
+@dataclass(frozen=True, slots=True)
+class DataItem:
+    id: str
+    name: str
+    type: str | None
+    default: Value
+
+
+@dataclass(frozen=True, slots=True)
+class BehaviourInfo:
+    name: str
+    ident: str
+    kind: str
+    library: str
+    outcomes: tuple[str, ...]
+    requires: tuple[str, ...]
+    inputs: tuple[tuple[str, str | None], ...]  # (identifier, type)
+    outputs: tuple[tuple[str, str | None], ...]
+    ros_kind: str | None = None
+    ros_name: str | None = None
+    ros_type: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class EventInfo:
+    name: str
+    ident: str
+    sender: str | None
+    scope: str | None
+    fields: tuple[tuple[str, str | None], ...]  # (identifier, type)
+
+
+@dataclass(frozen=True, slots=True)
+class HardwareInfo:
+    part: str
+    type: str
+    count: int
+
+
+@dataclass(frozen=True, slots=True)
+class Chart:
+    """One document: a member type's behaviour (or a stand-alone machine)."""
+
+    name: str  # identifier of the document (member type or machine)
+    machine: str  # the root machine's model name
+    member: str | None  # member type's model name
+    role: str | None
+    source: str  # base name of the model file
+    data: tuple[DataItem, ...]
+    initial: tuple[str, ...]  # ids entered when the machine starts
+    children: tuple[Node, ...]
+    hardware: tuple[HardwareInfo, ...] = ()
+    behaviours: tuple[BehaviourInfo, ...] = ()
+    events: tuple[EventInfo, ...] = ()
+    notes: dict[str, str] = field(default_factory=dict)
+
+    def walk(self) -> list[Node]:
+        """All nodes, in document order."""
+        found: list[Node] = []
+        stack = list(reversed(self.children))
+        while stack:
+            node = stack.pop()
+            found.append(node)
+            stack.extend(reversed(node.children))
+        return found
