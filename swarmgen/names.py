@@ -81,3 +81,9 @@ class IdAllocator:
 
     def __contains__(self, name: str) -> bool:
         return name in self._taken
+
+
+def one_line(text: str) -> str:
+    """Model text inside a generated comment or docstring line: no line breaks, no controls."""
+    flat = " ".join(text.splitlines())
+    return "".join(ch if ch.isprintable() else " " for ch in flat)

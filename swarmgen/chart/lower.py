@@ -92,6 +92,7 @@ class _Copy:
     leaving: dict[str, list[Transition]]
     arriving: dict[str, list[Transition]]
     parents: dict[str, str | None]  # vertex id -> id of the state holding it
+    joins: tuple[str, ...] = ()  # ids of the join pseudostates, found once (not per state)
 
 
 @dataclass
@@ -161,8 +162,13 @@ class _Lowering:
         if instance not in self.copies:
             placed = {p.vertex.id: p for p in walk(machine)}
             parents = {vid: (p.parent.id if p.parent else None) for vid, p in placed.items()}
+            joins = tuple(
+                vid
+                for vid, p in placed.items()
+                if isinstance(p.vertex, Pseudostate) and p.vertex.kind == PseudoKind.JOIN
+            )
             self.copies[instance] = _Copy(
-                machine, instance, placed, outgoing(machine), incoming(machine), parents
+                machine, instance, placed, outgoing(machine), incoming(machine), parents, joins
             )
         return self.copies[instance]
 
@@ -530,10 +536,8 @@ class _Lowering:
 
     def _joins(self, copy: _Copy, state: State) -> list[c.Transition]:
         found = []
-        for vertex_id, placed in copy.placed.items():
-            vertex = placed.vertex
-            if not (isinstance(vertex, Pseudostate) and vertex.kind == PseudoKind.JOIN):
-                continue
+        for vertex_id in copy.joins:
+            vertex = copy.placed[vertex_id].vertex
             arriving = copy.arriving.get(vertex_id, [])
             sources = [t.source for t in arriving]
             if not sources or self._common_ancestor(copy, sources) != state.id:

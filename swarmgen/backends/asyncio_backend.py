@@ -1,0 +1,122 @@
+"""The asyncio backend: a Python package per swarm, a module per member type, simulated
+behaviours, and a vendored copy of the runtime."""
+
+from __future__ import annotations
+
+from pathlib import PurePosixPath
+
+from swarmgen import __version__
+from swarmgen.backends import Files
+from swarmgen.backends.pyrender import ChartRenderer, format_python
+from swarmgen.backends.vendor import runtime_files
+from swarmgen.chart.model import Chart
+from swarmgen.ir.nodes import Model
+from swarmgen.names import IdAllocator, one_line, ros_name
+from swarmgen.render import render
+
+RUNTIME_MODULES = ("chart", "engine", "member", "simulated", "cli")
+_DEFAULTS = {"Real": 0.0, "Integer": 0, "Boolean": False, "String": ""}
+
+
+def package_name(model: Model) -> str:
+    return f"{ros_name(model.name or 'swarm')}_swarm"
+
+
+def member_modules(charts: tuple[Chart, ...]) -> dict[str, str]:
+    """chart name -> module name (lower snake case, unique)."""
+    taken = IdAllocator({"behaviours", "cli"})
+    return {chart.name: taken.claim(ros_name(chart.name)) for chart in charts}
+
+
+def default_scripts(charts: tuple[Chart, ...]) -> str:
+    """Simulated behaviours: those whose outcome no transition waits for run until preempted."""
+    scripts: dict[str, str] = {}
+    for chart in charts:
+        nodes = chart.walk()
+        waited = {
+            e for n in nodes for t in n.transitions for e in t.events if e.startswith("outcome.")
+        }
+        for node in nodes:
+            if node.call is None:
+                continue
+            info = next(b for b in chart.behaviours if b.name == node.call.behaviour)
+            ended = any(
+                e == f"outcome.{node.id}" or e.startswith(f"outcome.{node.id}.") for e in waited
+            )
+            if not ended:
+                scripts.setdefault(info.name, "Script(forever=True)")
+                continue
+            outputs = {name: _DEFAULTS.get(type_ or "") for name, type_ in info.outputs}
+            scripts[info.name] = f"Script(outcome='succeeded', duration=1.0, outputs={outputs!r})"
+    return "{" + ", ".join(f"{name!r}: {scripts[name]}" for name in sorted(scripts)) + "}"
+
+
+def signatures(charts: tuple[Chart, ...]) -> str:
+    seen = {b.name: b for chart in charts for b in chart.behaviours}
+    items = [
+        f"{name!r}: ({b.kind!r}, {tuple(n for n, _ in b.inputs)!r}, {tuple(n for n, _ in b.outputs)!r}, {b.outcomes!r})"
+        for name, b in sorted(seen.items())
+    ]
+    return "{" + ", ".join(items) + "}"
+
+
+class AsyncioBackend:
+    name = "asyncio"
+
+    def render(self, model: Model, charts: tuple[Chart, ...]) -> Files:
+        if not charts:
+            return {}  # no state machine, nothing to run
+        package = PurePosixPath(package_name(model))
+        modules = member_modules(charts)
+        source = charts[0].source if charts else model.source
+        common = {"version": __version__, "source": one_line(source), "runtime": "._runtime"}
+        files: Files = {}
+        for chart in charts:
+            files[package / f"{modules[chart.name]}.py"] = render_member(chart, common)
+        members = {c.member: modules[c.name] for c in charts if c.member}
+        composition = {p.type_name: p.count for s in model.swarms for p in s.members}
+        files[package / "__init__.py"] = format_python(
+            render(
+                "asyncio/package_init.py.j2",
+                **common,
+                model=model.name,
+                package=str(package),
+                first_member=next(iter(members), ""),
+                modules=sorted(modules.values()),
+                member_modules="{" + ", ".join(f"{k!r}: {v}" for k, v in members.items()) + "}",
+                composition=repr(composition),
+            )
+        )
+        files[package / "__main__.py"] = format_python(
+            render("asyncio/main.py.j2", **common, package=str(package))
+        )
+        files[package / "behaviours.py"] = format_python(
+            render(
+                "asyncio/behaviours.py.j2",
+                **common,
+                signatures=signatures(charts),
+                scripts=default_scripts(charts),
+            )
+        )
+        files.update(runtime_files(package / "_runtime", RUNTIME_MODULES))
+        return files
+
+
+def render_member(chart: Chart, common: dict[str, str]) -> str:
+    code = ChartRenderer(chart).render()
+    scopes = {e.ident: e.scope or "swarm" for e in chart.events}
+    what = f"member type {chart.member}" if chart.member else f"state machine {chart.machine}"
+    text = render(
+        "asyncio/member.py.j2",
+        **common,
+        what=one_line(what),
+        doc=one_line(f"Behaviour of {what} (state machine {chart.machine}).")
+        .replace('"', "'")
+        .replace("\\", "/"),
+        chart_name=repr(chart.name),
+        member_type=repr(chart.member),
+        machine=repr(chart.machine),
+        event_scopes=repr(scopes),
+        code=code,
+    )
+    return format_python(text)

@@ -1,0 +1,154 @@
+"""Python rendering shared by the Python backends: a chart becomes `ChartBuilder` calls plus the
+guard, action and argument functions rendered from the expression AST (never from model text).
+
+Every string that comes from the model is printed with `repr()`, so it stays a string literal.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import black
+from black.mode import TargetVersion
+
+from swarmgen.chart import model as c
+from swarmgen.ir import expr
+from swarmgen.ir.nodes import Value
+from swarmgen.names import identifier
+
+BLACK_MODE = black.Mode(line_length=100, target_versions={TargetVersion.PY311})
+
+
+def format_python(source: str) -> str:
+    """black, pinned (its output is in golden files and generated/)."""
+    return black.format_str(source, mode=BLACK_MODE)
+
+
+@dataclass(frozen=True)
+class Function:
+    name: str
+    kind: str  # "cond", "action" or "args"
+    body: tuple[str, ...]
+
+
+@dataclass
+class ChartCode:
+    """What a template prints for one chart: helper functions, then builder statements."""
+
+    functions: list[Function] = field(default_factory=list)
+    statements: list[str] = field(default_factory=list)
+    data_literal: str = "{}"
+
+
+def py_literal(value: Value) -> str:
+    if isinstance(value, float) and (value != value or value in {float("inf"), float("-inf")}):
+        return "None"
+    return repr(value)
+
+
+class ChartRenderer:
+    """Turns one chart into `ChartCode`."""
+
+    def __init__(self, chart: c.Chart) -> None:
+        self.chart = chart
+        self.code = ChartCode()
+        self.data_ids = {d.name: d.id for d in chart.data}
+        self._counter = 0
+
+    def render(self) -> ChartCode:
+        items = ", ".join(f"{d.id!r}: {py_literal(d.default)}" for d in self.chart.data)
+        self.code.data_literal = "{" + items + "}"
+        for node in self.chart.children:
+            self._node(node, None)
+        self.code.statements.append(f"b.initial(None, {tuple(self.chart.initial)!r})")
+        return self.code
+
+    # --- expressions
+
+    def py(self, e: expr.Expr) -> str:
+        return expr.to_python(
+            e,
+            name=lambda n: f"d[{(self.data_ids.get(n) or identifier(n))!r}]",
+            event_field=lambda f: f"ctx.event_data[{identifier(f)!r}]",
+        )
+
+    def _function(self, kind: str, body: list[str]) -> str:
+        self._counter += 1
+        name = f"_{kind}_{self._counter}"
+        self.code.functions.append(Function(name, kind, tuple(body)))
+        return name
+
+    def _cond(self, transition: c.Transition) -> str | None:
+        parts = [f"ctx.is_active({s!r})" for s in transition.in_states]
+        if transition.cond is not None:
+            parts.append(self.py(transition.cond))
+        if not parts:
+            return None
+        return self._function("cond", [f"return bool({' and '.join(parts)})"])
+
+    def _action(self, actions: tuple[c.Action, ...]) -> str | None:
+        lines = [line for action in actions for line in self._action_lines(action)]
+        return self._function("action", lines) if lines else None
+
+    def _action_lines(self, action: c.Action) -> list[str]:
+        if isinstance(action, c.Assign):
+            return [f"d[{action.location!r}] = {self.py(action.value)}"]
+        if isinstance(action, c.WriteBack):
+            return [f"ctx.write_back({action.location!r}, {action.field!r})"]
+        if isinstance(action, c.Raise | c.Send):
+            method = "raise_event" if isinstance(action, c.Raise) else "send"
+            data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
+            return [f"ctx.{method}({action.event!r}, {data if action.params else 'None'})"]
+        return [f"ctx.opaque({action.language!r}, {action.text!r})"]
+
+    def _args(self, call: c.Call) -> str:
+        items = ", ".join(f"{a.name!r}: {self.py(a.value)}" for a in call.args)
+        return self._function("args", [f"return {{{items}}}"])
+
+    # --- structure
+
+    def _node(self, node: c.Node, parent: str | None) -> None:
+        options = [f"name={(node.name or node.id)!r}"]
+        if node.history:
+            options.append(f"history={node.history!r}")
+        entry = self._action(node.onentry)
+        if entry:
+            options.append(f"onentry={entry}")
+        exit_ = self._action(node.onexit)
+        if exit_:
+            options.append(f"onexit={exit_}")
+        if node.call is not None:
+            call = node.call
+            options.append(
+                f"call=Call({call.behaviour!r}, {call.kind!r}, {self._args(call)}, {tuple(call.results)!r})"
+            )
+        if node.timers:
+            options.append(f"timers={tuple((t.event, t.delay_ms) for t in node.timers)!r}")
+        self.code.statements.append(
+            f"b.node({node.id!r}, {node.kind!r}, {parent!r}, {', '.join(options)})"
+        )
+        if node.initial is not None:
+            action = self._action(node.initial.actions)
+            extra = f", action={action}" if action else ""
+            self.code.statements.append(
+                f"b.initial({node.id!r}, {tuple(node.initial.targets)!r}{extra})"
+            )
+        for child in node.children:
+            self._node(child, node.id)
+        for transition in node.transitions:
+            self._transition(node.id, transition)
+
+    def _transition(self, source: str, transition: c.Transition) -> None:
+        options = []
+        cond = self._cond(transition)
+        if cond:
+            options.append(f"cond={cond}")
+        action = self._action(transition.actions)
+        if action:
+            options.append(f"action={action}")
+        if transition.internal:
+            options.append("internal=True")
+        head = (
+            f"b.transition({source!r}, {tuple(transition.events)!r}, {tuple(transition.targets)!r}"
+        )
+        self.code.statements.append(head + "".join(f", {o}" for o in options) + ")")

@@ -1,0 +1,233 @@
+"""The statechart structure generated code builds and the engine runs (standard library only).
+
+Generated modules call `ChartBuilder` with ids, events, targets and the guard and action
+functions swarmgen rendered from the model's expressions; `build()` links and checks it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+Cond = Callable[["Context"], bool]
+Action = Callable[["Context"], None]
+
+
+class Record(dict[str, Any]):
+    """Event and member data: a dict whose keys also read as attributes (`pose.x`), like the
+    SCXML ECMAScript datamodel."""
+
+    __slots__ = ()
+
+    def __getattr__(self, name: str) -> Any:
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
+def record(value: Any) -> Any:
+    """Deep-convert mappings to Records (lists are kept as lists of converted items)."""
+    if isinstance(value, Mapping):
+        return Record({str(k): record(v) for k, v in value.items()})
+    if isinstance(value, list | tuple):
+        return [record(v) for v in value]
+    return value
+
+
+@dataclass(frozen=True, slots=True)
+class Call:
+    """The library behaviour a state runs: name, how to compute its inputs, where outputs go."""
+
+    behaviour: str
+    kind: str
+    args: Callable[[Context], dict[str, Any]]
+    results: tuple[tuple[str, str], ...] = ()  # (output, data key)
+
+
+@dataclass(eq=False, slots=True)
+class Node:
+    id: str
+    kind: str  # "scxml" (the root), "state", "parallel", "final", "history"
+    name: str = ""
+    parent: Node | None = None
+    children: list[Node] = field(default_factory=list)
+    transitions: list[Transition] = field(default_factory=list)
+    initial: Transition | None = None
+    history: str = ""  # "shallow" or "deep" for history nodes
+    onentry: Action | None = None
+    onexit: Action | None = None
+    call: Call | None = None
+    timers: tuple[tuple[str, int], ...] = ()  # (event, delay in ms)
+    order: int = 0  # document order
+    depth: int = 0
+    ancestors: tuple[Node, ...] = ()  # proper ancestors, innermost first (root included)
+
+    @property
+    def is_atomic(self) -> bool:
+        return self.kind in {"state", "final"} and not any(
+            c.kind != "history" for c in self.children
+        )
+
+    @property
+    def is_compound(self) -> bool:
+        return self.kind in {"state", "scxml"} and any(c.kind != "history" for c in self.children)
+
+    def __repr__(self) -> str:
+        return f"<{self.kind} {self.id}>"
+
+
+@dataclass(eq=False, slots=True)
+class Transition:
+    source: Node
+    events: tuple[str, ...]
+    targets: tuple[Node, ...]
+    cond: Cond | None = None
+    action: Action | None = None
+    internal: bool = False
+    order: int = 0
+
+    def matches(self, name: str) -> bool:
+        """SCXML event descriptors: `a.b` matches `a.b` and `a.b.c`; `*` matches anything."""
+        for descriptor in self.events:
+            if descriptor == "*" or name == descriptor:
+                return True
+            prefix = descriptor[:-2] if descriptor.endswith(".*") else descriptor
+            if name.startswith(prefix) and name[len(prefix) : len(prefix) + 1] == ".":
+                return True
+        return False
+
+
+@dataclass(slots=True)
+class Chart:
+    name: str
+    root: Node
+    nodes: dict[str, Node]
+    data: dict[str, Any]  # initial member data
+    names: dict[str, str]  # node id -> model name
+
+    def fresh_data(self) -> Record:
+        return Record({key: record(value) for key, value in self.data.items()})
+
+
+class Context:
+    """What guards and actions see: member data, the current event, and the engine's services."""
+
+    __slots__ = ("_engine", "data", "event")
+
+    def __init__(self, engine: Any, data: Record) -> None:
+        self._engine = engine
+        self.data = data
+        self.event: Any = None
+
+    @property
+    def event_data(self) -> Record:
+        data = self.event.data if self.event is not None else None
+        if not isinstance(data, Record):
+            raise LookupError("the event carries no data")
+        return data
+
+    def is_active(self, node_id: str) -> bool:
+        return bool(self._engine.is_active(node_id))
+
+    def raise_event(self, name: str, data: Mapping[str, Any] | None = None) -> None:
+        self._engine.raise_internal(name, data)
+
+    def send(self, name: str, data: Mapping[str, Any] | None = None) -> None:
+        self._engine.send_swarm(name, data)
+
+    def write_back(self, key: str, field_name: str) -> None:
+        data = self.event.data if self.event is not None else None
+        if isinstance(data, Mapping) and field_name in data:
+            self.data[key] = record(data[field_name])
+
+    def opaque(self, language: str, text: str) -> None:
+        """Code in a language swarmgen does not execute: recorded, not run."""
+
+
+class ChartBuilder:
+    """Used by generated code: declare nodes (parents first) and transitions, then `build()`."""
+
+    def __init__(self, name: str, data: Mapping[str, Any] | None = None) -> None:
+        self._root = Node("", "scxml")
+        self._nodes: dict[str, Node] = {}
+        self._pending: list[tuple[str, tuple[str, ...], tuple[str, ...], dict[str, Any]]] = []
+        self._initials: list[tuple[str | None, tuple[str, ...], Action | None]] = []
+        self._name = name
+        self._data = dict(data or {})
+        self._names: dict[str, str] = {}
+
+    def node(
+        self,
+        node_id: str,
+        kind: str,
+        parent: str | None = None,
+        *,
+        name: str = "",
+        onentry: Action | None = None,
+        onexit: Action | None = None,
+        call: Call | None = None,
+        timers: Sequence[tuple[str, int]] = (),
+        history: str = "",
+    ) -> None:
+        if node_id in self._nodes or not node_id:
+            raise ValueError(f"duplicate or empty node id {node_id!r}")
+        owner = self._nodes[parent] if parent is not None else self._root
+        node = Node(
+            node_id, kind, name or node_id, owner, onentry=onentry, onexit=onexit, call=call
+        )
+        node.timers = tuple(timers)
+        node.history = history
+        owner.children.append(node)
+        self._nodes[node_id] = node
+        self._names[node_id] = name or node_id
+
+    def transition(
+        self,
+        source: str,
+        events: Sequence[str] = (),
+        targets: Sequence[str] = (),
+        *,
+        cond: Cond | None = None,
+        action: Action | None = None,
+        internal: bool = False,
+    ) -> None:
+        options = {"cond": cond, "action": action, "internal": internal}
+        self._pending.append((source, tuple(events), tuple(targets), options))
+
+    def initial(
+        self, parent: str | None, targets: Sequence[str], action: Action | None = None
+    ) -> None:
+        """The initial transition of a compound state (or the default of a history node);
+        `parent=None` is the machine's own initial configuration."""
+        self._initials.append((parent, tuple(targets), action))
+
+    def build(self) -> Chart:
+        order = 0
+        stack: list[tuple[Node, int, tuple[Node, ...]]] = [(self._root, 0, ())]
+        while stack:  # document order, depth and ancestors
+            node, depth, ancestors = stack.pop()
+            node.order, node.depth, node.ancestors = order, depth, ancestors
+            order += 1
+            for child in reversed(node.children):
+                stack.append((child, depth + 1, (node, *ancestors)))
+        for number, (source, events, targets, options) in enumerate(self._pending):
+            node = self._lookup(source)
+            node.transitions.append(
+                Transition(
+                    node, events, tuple(self._lookup(t) for t in targets), order=number, **options
+                )
+            )
+        for parent, targets, action in self._initials:
+            owner = self._lookup(parent) if parent is not None else self._root
+            owner.initial = Transition(
+                owner, (), tuple(self._lookup(t) for t in targets), action=action
+            )
+        return Chart(self._name, self._root, dict(self._nodes), self._data, self._names)
+
+    def _lookup(self, node_id: str) -> Node:
+        try:
+            return self._nodes[node_id]
+        except KeyError:
+            raise ValueError(f"unknown node {node_id!r}") from None

@@ -1,0 +1,448 @@
+"""SCXML semantics, once: the W3C SCXML 1.0 interpretation algorithm (Appendix D) over a `Chart`.
+
+Synchronous and deterministic: `start()` and `send(event)` each run a complete macrostep.
+Behaviours, timers and the swarm bus are the host's business (see `member.py`); the engine tells
+the host when a state's behaviour must start (end of the macrostep that entered it, like an
+SCXML `<invoke>`) or be cancelled (when the state is exited), and drops the outcome events of
+cancelled activations.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections import deque
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+from swarmgen.runtime.chart import Call, Chart, Context, Node, Record, Transition, record
+
+OUTCOME_PREFIX = "outcome."
+
+
+@dataclass(slots=True)
+class Event:
+    """The paper's event format: name, data, a unique id, a timestamp and the sender's id."""
+
+    name: str
+    data: Record | None = None
+    id: int = 0
+    timestamp: float = 0.0
+    sender: str = ""
+    origin: tuple[str, int] | None = None  # (state id, activation) of a behaviour's outcome
+    kind: str = "external"  # "external", "internal" or "platform"
+
+
+class Host(Protocol):
+    def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None: ...
+    def cancel_call(self, node: Node, activation: int) -> None: ...
+    def start_timer(self, node: Node, event: str, delay_ms: int) -> None: ...
+    def cancel_timer(self, node: Node, event: str) -> None: ...
+    def send_swarm(self, event: Event) -> None: ...
+
+
+class NullHost:
+    """A host that runs nothing: outcomes and timer events are submitted by hand (tests, replay)."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[str, str, dict[str, Any]]] = []
+        self.sent: list[Event] = []
+        self.timers: dict[str, int] = {}
+
+    def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
+        self.calls.append((node.id, call.behaviour, args))
+
+    def cancel_call(self, node: Node, activation: int) -> None:
+        pass
+
+    def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
+        self.timers[event] = delay_ms
+
+    def cancel_timer(self, node: Node, event: str) -> None:
+        self.timers.pop(event, None)
+
+    def send_swarm(self, event: Event) -> None:
+        self.sent.append(event)
+
+
+@dataclass
+class Engine:
+    chart: Chart
+    host: Host = field(default_factory=NullHost)
+    member_id: str = ""
+    clock: Callable[[], float] = time.time
+    on_error: Callable[[str, BaseException], None] | None = None
+
+    def __post_init__(self) -> None:
+        self.data = self.chart.fresh_data()
+        self.ctx = Context(self, self.data)
+        self.config: set[Node] = set()
+        self.internal: deque[Event] = deque()
+        self.history: dict[Node, list[Node]] = {}
+        self.running = False
+        self.finished = False
+        self._to_invoke: set[Node] = set()
+        self._activation: dict[Node, int] = {}
+        self._ids = itertools.count(1)
+        self._active_ids: frozenset[str] | None = None
+
+    # --- public
+
+    def start(self) -> None:
+        self.running = True
+        root = self.chart.root
+        if root.initial is None:
+            raise ValueError(f"chart {self.chart.name} has no initial state")
+        self._enter_states([root.initial])
+        self._macrostep()
+
+    def send(self, event: Event) -> None:
+        """Process one external event completely (one macrostep)."""
+        if not self.running:
+            return
+        if event.origin is not None and not self._current_activation(event.origin):
+            return  # the outcome of a behaviour that was cancelled: discarded
+        self.ctx.event = event
+        enabled = self._select_transitions(event)
+        if enabled:
+            self._microstep(enabled)
+        self._macrostep()
+
+    def make_event(
+        self, name: str, data: Mapping[str, Any] | None = None, sender: str = "", **extra: Any
+    ) -> Event:
+        return Event(
+            name,
+            record(data) if data is not None else None,
+            next(self._ids),
+            self.clock(),
+            sender,
+            **extra,
+        )
+
+    def active(self) -> list[str]:
+        """Ids of all active states (atomic and compound), sorted."""
+        return sorted(node.id for node in self.config)
+
+    def is_active(self, node_id: str) -> bool:
+        if self._active_ids is None:
+            self._active_ids = frozenset(n.id for n in self.config)
+        return node_id in self._active_ids
+
+    # --- services for actions (Context)
+
+    def raise_internal(self, name: str, data: Mapping[str, Any] | None) -> None:
+        self.internal.append(self.make_event(name, data, self.member_id, kind="internal"))
+
+    def send_swarm(self, name: str, data: Mapping[str, Any] | None) -> None:
+        self.host.send_swarm(self.make_event(name, data, self.member_id))
+
+    # --- the algorithm
+
+    def _macrostep(self) -> None:
+        while self.running:
+            enabled = self._select_transitions(None)
+            if not enabled:
+                if not self.internal:
+                    break
+                event = self.internal.popleft()
+                self.ctx.event = event
+                enabled = self._select_transitions(event)
+            if enabled:
+                self._microstep(enabled)
+        self._start_calls()
+
+    def _start_calls(self) -> None:
+        for node in sorted(self._to_invoke, key=_document_order):
+            if node in self.config and node.call is not None:
+                activation = self._activation.get(node, 0) + 1
+                self._activation[node] = activation
+                args = self._guarded(node.call.args, f"arguments of {node.id}")
+                self.host.start_call(
+                    node, node.call, args if isinstance(args, dict) else {}, activation
+                )
+        self._to_invoke.clear()
+
+    def _current_activation(self, origin: tuple[str, int]) -> bool:
+        node = self.chart.nodes.get(origin[0])
+        return node is not None and node in self.config and self._activation.get(node) == origin[1]
+
+    def _select_transitions(self, event: Event | None) -> list[Transition]:
+        enabled: list[Transition] = []
+        seen: set[int] = set()
+        atomic = sorted((n for n in self.config if n.is_atomic), key=_document_order)
+        for state in atomic:
+            for owner in (state, *state.ancestors):
+                chosen = self._first_enabled(owner, event)
+                if chosen is not None:
+                    if id(chosen) not in seen:
+                        seen.add(id(chosen))
+                        enabled.append(chosen)
+                    break
+        return self._remove_conflicts(enabled)
+
+    def _first_enabled(self, owner: Node, event: Event | None) -> Transition | None:
+        for transition in owner.transitions:
+            if event is None:
+                if transition.events:
+                    continue
+            elif not transition.events or not transition.matches(event.name):
+                continue
+            if (
+                transition.cond is None
+                or self._guarded(transition.cond, f"guard in {owner.id}") is True
+            ):
+                return transition
+        return None
+
+    def _remove_conflicts(self, enabled: list[Transition]) -> list[Transition]:
+        filtered: list[Transition] = []
+        exit_sets: dict[int, set[Node]] = {}
+        for t1 in enabled:
+            exits1 = exit_sets.setdefault(id(t1), self._exit_set([t1]))
+            preempted = False
+            to_remove: list[Transition] = []
+            for t2 in filtered:
+                if exits1 & exit_sets[id(t2)]:
+                    if _is_descendant(t1.source, t2.source):
+                        to_remove.append(t2)
+                    else:
+                        preempted = True
+                        break
+            if not preempted:
+                filtered = [t for t in filtered if t not in to_remove]
+                filtered.append(t1)
+        return filtered
+
+    def _microstep(self, enabled: list[Transition]) -> None:
+        self._exit_states(enabled)
+        for transition in enabled:
+            self._run(transition.action, f"transition from {transition.source.id}")
+        self._enter_states(enabled)
+        self._active_ids = None
+
+    def _exit_set(self, transitions: Iterable[Transition]) -> set[Node]:
+        to_exit: set[Node] = set()
+        for transition in transitions:
+            if transition.targets:
+                domain = self._domain(transition)
+                to_exit.update(
+                    s for s in self.config if domain is None or _is_descendant(s, domain)
+                )
+        return to_exit
+
+    def _exit_states(self, enabled: list[Transition]) -> None:
+        to_exit = sorted(self._exit_set(enabled), key=_document_order, reverse=True)
+        self._to_invoke.difference_update(to_exit)
+        for state in to_exit:
+            for child in state.children:
+                if child.kind == "history":
+                    if child.history == "deep":
+                        recorded = [
+                            s for s in self.config if s.is_atomic and _is_descendant(s, state)
+                        ]
+                    else:
+                        recorded = [s for s in self.config if s.parent is state]
+                    self.history[child] = sorted(recorded, key=_document_order)
+        for state in to_exit:
+            if state.call is not None and state in self._activation:
+                self.host.cancel_call(state, self._activation[state])
+                self._activation[state] += 1  # late outcomes of this activation are stale
+            for event, _ in state.timers:
+                self.host.cancel_timer(state, event)
+            self._run(state.onexit, f"exit of {state.id}")
+            self.config.discard(state)
+        self._active_ids = None
+
+    def _enter_states(self, enabled: list[Transition]) -> None:
+        to_enter: set[Node] = set()
+        default_entry: set[Node] = set()
+        history_content: dict[Node, Transition] = {}
+        for transition in enabled:
+            for target in transition.targets:
+                self._add_descendants(target, to_enter, default_entry, history_content)
+            ancestor = self._domain(transition)
+            for state in self._effective_targets(transition):
+                self._add_ancestors(state, ancestor, to_enter, default_entry, history_content)
+        for state in sorted(to_enter, key=_document_order):
+            self.config.add(state)
+            self._active_ids = None
+            self._to_invoke.add(state)
+            self._run(state.onentry, f"entry of {state.id}")
+            for event, delay in state.timers:
+                self.host.start_timer(state, event, delay)
+            if state in default_entry and state.initial is not None:
+                self._run(state.initial.action, f"initial transition of {state.id}")
+            if state in history_content:
+                self._run(history_content[state].action, f"history default in {state.id}")
+            if state.kind == "final":
+                self._reached_final(state)
+
+    def _reached_final(self, state: Node) -> None:
+        parent = state.parent
+        if parent is None or parent.kind == "scxml":
+            self.running = False
+            self.finished = True
+            self._exit_everything()
+            return
+        self.internal.append(self.make_event(f"done.state.{parent.id}", kind="platform"))
+        grandparent = parent.parent
+        if (
+            grandparent is not None
+            and grandparent.kind == "parallel"
+            and all(self._in_final(c) for c in grandparent.children if c.kind != "history")
+        ):
+            self.internal.append(self.make_event(f"done.state.{grandparent.id}", kind="platform"))
+
+    def _exit_everything(self) -> None:
+        """The machine is done: behaviours are cancelled and exit actions run; the final
+        configuration stays visible (as Qt SCXML reports it) for traces."""
+        for state in sorted(self.config, key=_document_order, reverse=True):
+            if state.call is not None and state in self._activation:
+                self.host.cancel_call(state, self._activation[state])
+                self._activation[state] += 1
+            for event, _ in state.timers:
+                self.host.cancel_timer(state, event)
+            self._run(state.onexit, f"exit of {state.id}")
+        self._to_invoke.clear()
+        self.internal.clear()
+
+    def _in_final(self, state: Node) -> bool:
+        if state.kind == "parallel":
+            return all(self._in_final(c) for c in state.children if c.kind != "history")
+        if state.is_compound:
+            return any(c.kind == "final" and c in self.config for c in state.children)
+        return False
+
+    def _add_descendants(
+        self,
+        state: Node,
+        to_enter: set[Node],
+        default_entry: set[Node],
+        history_content: dict[Node, Transition],
+    ) -> None:
+        if state.kind == "history":
+            parent = state.parent
+            assert parent is not None
+            recorded = self.history.get(state)
+            if recorded:
+                for s in recorded:
+                    self._add_descendants(s, to_enter, default_entry, history_content)
+                for s in recorded:
+                    self._add_ancestors(s, parent, to_enter, default_entry, history_content)
+            elif state.initial is not None:
+                history_content[parent] = state.initial
+                for s in state.initial.targets:
+                    self._add_descendants(s, to_enter, default_entry, history_content)
+                for s in state.initial.targets:
+                    self._add_ancestors(s, parent, to_enter, default_entry, history_content)
+            return
+        to_enter.add(state)
+        if state.is_compound:
+            default_entry.add(state)
+            targets = state.initial.targets if state.initial is not None else _first_child(state)
+            for s in targets:
+                self._add_descendants(s, to_enter, default_entry, history_content)
+            for s in targets:
+                self._add_ancestors(s, state, to_enter, default_entry, history_content)
+        elif state.kind == "parallel":
+            for child in state.children:
+                if child.kind != "history" and not any(_is_descendant(s, child) for s in to_enter):
+                    self._add_descendants(child, to_enter, default_entry, history_content)
+
+    def _add_ancestors(
+        self,
+        state: Node,
+        ancestor: Node | None,
+        to_enter: set[Node],
+        default_entry: set[Node],
+        history_content: dict[Node, Transition],
+    ) -> None:
+        for anc in state.ancestors:
+            if anc is ancestor or anc.kind == "scxml":
+                break
+            to_enter.add(anc)
+            if anc.kind == "parallel":
+                for child in anc.children:
+                    if child.kind != "history" and not any(
+                        _is_descendant(s, child) for s in to_enter
+                    ):
+                        self._add_descendants(child, to_enter, default_entry, history_content)
+
+    def _effective_targets(self, transition: Transition) -> list[Node]:
+        found: list[Node] = []
+        for target in transition.targets:
+            if target.kind == "history":
+                recorded = self.history.get(target)
+                if recorded:
+                    found.extend(recorded)
+                elif target.initial is not None:
+                    found.extend(self._effective_targets(target.initial))
+            else:
+                found.append(target)
+        return found
+
+    def _domain(self, transition: Transition) -> Node | None:
+        targets = self._effective_targets(transition)
+        if not targets:
+            return None
+        source = transition.source
+        if (
+            transition.internal
+            and source.is_compound
+            and all(_is_descendant(t, source) for t in targets)
+        ):
+            return source
+        return _lcca([source, *targets])
+
+    # --- executable content
+
+    def _run(self, action: Callable[[Context], None] | None, where: str) -> None:
+        if action is None:
+            return
+        try:
+            action(self.ctx)
+        except Exception as err:  # SCXML: an error stops the block and raises error.execution
+            self._error(where, err)
+        self._active_ids = None
+
+    def _guarded(self, function: Callable[[Context], Any], where: str) -> Any:
+        try:
+            return function(self.ctx)
+        except Exception as err:  # a guard that cannot be evaluated is false (SCXML 5.9)
+            self._error(where, err)
+            return None
+
+    def _error(self, where: str, err: BaseException) -> None:
+        self.internal.append(
+            self.make_event(
+                "error.execution", {"where": where, "error": repr(err)}, kind="platform"
+            )
+        )
+        if self.on_error is not None:
+            self.on_error(where, err)
+
+
+def _document_order(node: Node) -> int:
+    return node.order
+
+
+def _is_descendant(node: Node, ancestor: Node) -> bool:
+    return ancestor in node.ancestors
+
+
+def _first_child(state: Node) -> tuple[Node, ...]:
+    for child in state.children:
+        if child.kind != "history":
+            return (child,)
+    return ()
+
+
+def _lcca(states: list[Node]) -> Node | None:
+    """Least common compound ancestor (the root counts as compound)."""
+    head, rest = states[0], states[1:]
+    for anc in head.ancestors:
+        if anc.kind in {"state", "scxml"} and all(_is_descendant(s, anc) for s in rest):
+            return anc
+    return None
