@@ -6,6 +6,7 @@ misuse, 3 an internal error (a bug in swarmgen: please report it).
 
 from __future__ import annotations
 
+import json
 import sys
 import traceback
 from collections.abc import Callable
@@ -147,3 +148,28 @@ def schema(output: Path, check: bool) -> None:
     output.mkdir(parents=True, exist_ok=True)
     target.write_text(text, encoding="utf-8")
     click.echo(f"swarmgen: wrote {target}", err=True)
+
+
+@main.command()
+@MODEL
+@click.option("--member", required=True, help="Member type to run.")
+@click.option(
+    "--script", "scenario", type=click.Path(path_type=Path), required=True, help="Scenario (JSON)."
+)
+@click.option(
+    "--backend", type=click.Choice(["asyncio", "scxml"]), default="asyncio", show_default=True,
+    help="Where to run: the generated asyncio code, or the SCXML in Qt SCXML.",
+)  # fmt: skip
+@_guarded
+def replay(model: Path, member: str, scenario: Path, backend: str) -> None:
+    """Run one member of MODEL against a scenario; print its trace as JSON lines."""
+    from swarmgen import replay as replaying
+
+    try:
+        _, steps = replaying.load_scenario(scenario)
+        trace = replaying.replay(model, member, steps, backend)
+    except replaying.ReplayError as err:
+        click.echo(f"swarmgen: error: {err}", err=True)
+        sys.exit(dg.ExitCode.INPUT_ERROR)
+    for record in trace:
+        click.echo(json.dumps(record, sort_keys=True))

@@ -14,7 +14,7 @@ from swarmgen.ir.nodes import Model
 from swarmgen.names import IdAllocator, one_line, ros_name
 from swarmgen.render import render
 
-RUNTIME_MODULES = ("chart", "engine", "member", "simulated", "cli")
+RUNTIME_MODULES = ("chart", "engine", "member", "simulated", "cli", "replay")
 _DEFAULTS = {"Real": 0.0, "Integer": 0, "Boolean": False, "String": ""}
 
 

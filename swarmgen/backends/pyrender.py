@@ -69,7 +69,8 @@ class ChartRenderer:
         return expr.to_python(
             e,
             name=lambda n: f"d[{(self.data_ids.get(n) or identifier(n))!r}]",
-            event_field=lambda f: f"ctx.event_data[{identifier(f)!r}]",
+            # a missing field reads as None, as `_event.data.f` reads undefined in SCXML
+            event_field=lambda f: f"ctx.event_data.get({identifier(f)!r})",
         )
 
     def _function(self, kind: str, body: list[str]) -> str:

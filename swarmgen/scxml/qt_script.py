@@ -35,7 +35,58 @@ def _settle(app: object, rounds: int = 10) -> None:
         app.processEvents()  # type: ignore[attr-defined]
 
 
-def _run(path: str, steps: list[list[object]]) -> None:
+SCXML = "{http://www.w3.org/2005/07/scxml}"
+SG = "{urn:swarmgen:scxml:1}"
+
+
+def _document(path: str) -> tuple[list[str], list[tuple[str, str]]]:
+    """(data ids, [(state id, behaviour)] in document order) from the SCXML file."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    data = sorted(e.get("id", "") for e in root.iter(f"{SCXML}data"))
+    calls = []
+    for element in root.iter():
+        if element.tag in (f"{SCXML}state", f"{SCXML}parallel"):
+            for onentry in element.findall(f"{SCXML}onentry"):
+                for call in onentry.findall(f"{SG}call"):
+                    calls.append((element.get("id", ""), call.get("behaviour", "")))
+    return data, calls
+
+
+def _expand(step: dict) -> list:
+    burst = step.get("burst")
+    return list(burst) if isinstance(burst, list) else [step]
+
+
+def _describe(step: dict) -> str:
+    if "burst" in step:
+        return " + ".join(_describe(s) for s in _expand(step))
+    if "complete" in step:
+        return f"{step['complete']} -> {step.get('outcome', 'succeeded')}"
+    return str(step.get("event", "?"))
+
+
+def _submit(machine: object, step: dict, calls: list[tuple[str, str]]) -> None:
+    """The same rules as swarmgen.runtime.replay: a `complete` step ends the behaviour of the
+    first active state (document order) that runs it, or of the state named."""
+    if "complete" in step:
+        active = set(machine.activeStateNames(False))  # type: ignore[attr-defined]
+        wanted = step.get("state")
+        for state, behaviour in calls:
+            if (
+                behaviour == step["complete"]
+                and state in active
+                and (wanted is None or wanted == state)
+            ):
+                outcome = step.get("outcome", "succeeded")
+                machine.submitEvent(f"outcome.{state}.{outcome}", step.get("outputs") or {})  # type: ignore[attr-defined]
+                return
+        return
+    machine.submitEvent(str(step["event"]), step.get("data") or {})  # type: ignore[attr-defined]
+
+
+def _run(path: str, steps: list[dict]) -> None:
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
     from PySide2.QtCore import QCoreApplication
     from PySide2.QtScxml import QScxmlStateMachine
@@ -46,28 +97,25 @@ def _run(path: str, steps: list[list[object]]) -> None:
     if errors:
         print(json.dumps({"errors": errors}), flush=True)
         return
-    names = _data_names(path)
+    names, calls = _document(path)
     machine.start()
     _settle(app)
-    _report(machine, None, names)
-    for event, data in steps:
-        machine.submitEvent(str(event), data if data is not None else {})
+    _report(machine, 0, None, names)
+    for number, step in enumerate(steps, start=1):
+        if isinstance(step, list):  # the older [event, data] form
+            step = {"event": step[0], "data": step[1]}
+        for item in _expand(step):
+            _submit(machine, item, calls)
         _settle(app)
-        _report(machine, event, names)
+        _report(machine, number, _describe(step), names)
 
 
-def _data_names(path: str) -> list[str]:
-    import xml.etree.ElementTree as ET
-
-    tree = ET.parse(path)
-    return sorted(e.get("id", "") for e in tree.iter("{http://www.w3.org/2005/07/scxml}data"))
-
-
-def _report(machine: object, event: object, names: list[str]) -> None:
+def _report(machine: object, number: int, described: object, names: list[str]) -> None:
     model = machine.dataModel()  # type: ignore[attr-defined]
     data = {n: model.scxmlProperty(n) for n in names}
     active = sorted(machine.activeStateNames(False))  # type: ignore[attr-defined]
-    print(json.dumps({"event": event, "active": active, "data": data}, default=str), flush=True)
+    record = {"step": number, "input": described, "active": active, "data": data}
+    print(json.dumps(record, default=str), flush=True)
 
 
 if __name__ == "__main__":

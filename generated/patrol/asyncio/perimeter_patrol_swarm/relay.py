@@ -30,12 +30,12 @@ def _args_2(ctx: Context) -> dict[str, Any]:
 
 
 def _cond_3(ctx: Context) -> bool:
-    return bool((ctx.event_data["level"] >= 3))
+    return bool((ctx.event_data.get("level") >= 3))
 
 
 def _action_4(ctx: Context) -> None:
     d = ctx.data
-    d["alarm_zone"] = ctx.event_data["zone"]
+    d["alarm_zone"] = ctx.event_data.get("zone")
     d["alarms"] = d["alarms"] + 1
 
 

@@ -76,14 +76,14 @@ def _action_10(ctx: Context) -> None:
 
 def _cond_11(ctx: Context) -> bool:
     d = ctx.data
-    return bool(((ctx.event_data["zone"] == d["zone_id"]) and (not d["alarm_raised"])))
+    return bool(((ctx.event_data.get("zone") == d["zone_id"]) and (not d["alarm_raised"])))
 
 
 def _action_12(ctx: Context) -> None:
     d = ctx.data
     ctx.send("alarm", {"zone": d["zone_id"], "level": 2})
     d["alarm_raised"] = True
-    d["intruder_pose"] = ctx.event_data["pose"]
+    d["intruder_pose"] = ctx.event_data.get("pose")
 
 
 def _action_13(ctx: Context) -> None:
@@ -164,12 +164,12 @@ def _args_27(ctx: Context) -> dict[str, Any]:
 
 def _cond_28(ctx: Context) -> bool:
     d = ctx.data
-    return bool(((ctx.event_data["battery"] < 20) and (not d["low_battery"])))
+    return bool(((ctx.event_data.get("battery") < 20) and (not d["low_battery"])))
 
 
 def _action_29(ctx: Context) -> None:
     d = ctx.data
-    d["battery"] = ctx.event_data["battery"]
+    d["battery"] = ctx.event_data.get("battery")
     d["low_battery"] = True
     ctx.raise_event("lowBattery", None)
 

@@ -31,8 +31,8 @@ def _args_2(ctx: Context) -> dict[str, Any]:
 
 def _action_3(ctx: Context) -> None:
     d = ctx.data
-    d["target_id"] = ctx.event_data["target_id"]
-    d["target_pose"] = ctx.event_data["pose"]
+    d["target_id"] = ctx.event_data.get("target_id")
+    d["target_pose"] = ctx.event_data.get("pose")
 
 
 def _args_4(ctx: Context) -> dict[str, Any]:

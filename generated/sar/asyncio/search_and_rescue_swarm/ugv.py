@@ -16,8 +16,8 @@ EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "tar
 
 def _action_1(ctx: Context) -> None:
     d = ctx.data
-    d["target_id"] = ctx.event_data["target_id"]
-    d["target_pose"] = ctx.event_data["pose"]
+    d["target_id"] = ctx.event_data.get("target_id")
+    d["target_pose"] = ctx.event_data.get("pose")
 
 
 def _args_2(ctx: Context) -> dict[str, Any]:

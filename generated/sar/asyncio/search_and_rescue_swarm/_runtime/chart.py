@@ -124,10 +124,9 @@ class Context:
 
     @property
     def event_data(self) -> Record:
+        """The current event's data; empty when it carries none (`_event.data` in SCXML)."""
         data = self.event.data if self.event is not None else None
-        if not isinstance(data, Record):
-            raise LookupError("the event carries no data")
-        return data
+        return data if isinstance(data, Record) else Record()
 
     def is_active(self, node_id: str) -> bool:
         return bool(self._engine.is_active(node_id))

@@ -126,6 +126,11 @@ class Engine:
         """Ids of all active states (atomic and compound), sorted."""
         return sorted(node.id for node in self.config)
 
+    def activation(self, node_id: str) -> int:
+        """The current activation number of a state's behaviour (outcome events carry it)."""
+        node = self.chart.nodes.get(node_id)
+        return self._activation.get(node, 0) if node is not None else 0
+
     def is_active(self, node_id: str) -> bool:
         if self._active_ids is None:
             self._active_ids = frozenset(n.id for n in self.config)

@@ -21,6 +21,7 @@ class Outcome:
 
     name: str
     outputs: Mapping[str, Any] = field(default_factory=dict)
+    reported: bool = False  # the outcome event was already delivered (replay submits it in order)
 
 
 @dataclass(slots=True)
@@ -172,6 +173,8 @@ class Member:
         except Exception as err:  # a failing behaviour ends with the outcome `aborted`
             self.errors.append(f"behaviour {request.behaviour} in {node.id} failed: {err!r}")
             outcome = Outcome("aborted")
+        if outcome.reported:
+            return
         event = self.engine.make_event(
             f"{OUTCOME_PREFIX}{node.id}.{outcome.name}",
             dict(outcome.outputs),

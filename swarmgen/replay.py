@@ -1,0 +1,167 @@
+"""`swarmgen replay`: run one member of a compiled model against a scenario on one backend and
+return its trace (one record per step: input, active states, member data).
+
+Backends: `asyncio` runs the generated asyncio package (its vendored runtime, behaviours as
+tasks); `scxml` runs the emitted SCXML in Qt SCXML (system python3 + PySide2), the independent
+reference. Each backend compiles into a temporary directory and imports or loads from there.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import importlib
+import importlib.util
+import itertools
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+from swarmgen import pipeline
+from swarmgen.backends.asyncio_backend import member_modules, package_name
+from swarmgen.chart.lower import lower
+
+SYSTEM_PYTHON = "/usr/bin/python3"
+QT_SCRIPT = Path(__file__).resolve().parent / "scxml" / "qt_script.py"
+BACKENDS = ("asyncio", "scxml")
+_unique = itertools.count()
+
+
+class ReplayError(Exception):
+    """The model, member, scenario or backend cannot be replayed (a user error)."""
+
+
+def load_scenario(path: Path) -> tuple[str | None, list[dict[str, Any]]]:
+    """(member type or None, steps) from a JSON scenario file; see swarmgen.runtime.replay."""
+    try:
+        payload = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as err:
+        raise ReplayError(f"{path}: cannot read the scenario: {err}") from None
+    except json.JSONDecodeError as err:
+        raise ReplayError(
+            f"{path}:{err.lineno}:{err.colno}: scenario is not JSON: {err.msg}"
+        ) from None
+    steps = payload.get("steps") if isinstance(payload, dict) else payload
+    if not isinstance(steps, list):
+        raise ReplayError(f'{path}: a scenario is a list of steps or {{"steps": [...]}}')
+    for number, step in enumerate(steps, start=1):
+        _check_step(path, number, step)
+    member = payload.get("member") if isinstance(payload, dict) else None
+    return (str(member) if member is not None else None), steps
+
+
+def _check_step(path: Path, number: int, step: object) -> None:
+    if not isinstance(step, dict):
+        raise ReplayError(f"{path}: step {number} is not an object")
+    if "burst" in step:
+        burst = step["burst"]
+        if not isinstance(burst, list) or not burst:
+            raise ReplayError(f"{path}: step {number}: `burst` needs a non-empty list of steps")
+        for inner in burst:
+            _check_step(path, number, inner)
+        return
+    if "event" not in step and "complete" not in step:
+        raise ReplayError(f"{path}: step {number} needs `event`, `complete` or `burst`")
+    for key in ("data", "outputs"):
+        if key in step and not isinstance(step[key], dict | type(None)):
+            raise ReplayError(f"{path}: step {number}: `{key}` must be an object")
+
+
+def replay(
+    model: Path, member: str, steps: Sequence[dict[str, Any]], backend: str
+) -> list[dict[str, Any]]:
+    validation = pipeline.validate(model)
+    if validation.model is None or pipeline.dg.has_errors(validation.diagnostics):
+        raise ReplayError(f"{model}: the model has errors; run `swarmgen validate {model}`")
+    charts = {c.member or c.name: c for c in lower(validation.model)}
+    if member not in charts:
+        raise ReplayError(f"no member type '{member}'; choose one of: {', '.join(sorted(charts))}")
+    if backend not in BACKENDS:
+        raise ReplayError(f"unknown backend '{backend}'; choose one of: {', '.join(BACKENDS)}")
+    result = pipeline.compile_model(model, backends=[backend] if backend != "scxml" else [])
+    with tempfile.TemporaryDirectory(prefix="swarmgen-replay-") as tmp:
+        out = Path(tmp) / "out"
+        pipeline.write_tree(result.files, out)
+        chart = charts[member]
+        if backend == "scxml":
+            trace = run_qt(out / "scxml" / f"{chart.name}.scxml", steps)
+        else:
+            package = out / "asyncio" / package_name(validation.model)
+            module_name = member_modules(tuple(charts.values()))[chart.name]
+            trace = _run_asyncio(package, module_name, member, steps)
+    return [canonical(record) for record in trace]
+
+
+def canonical(value: Any) -> Any:
+    """Numbers as ECMAScript sees them (3.0 is 3), so traces of all backends compare as text."""
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2**53:
+        return int(value)
+    if isinstance(value, dict):
+        return {k: canonical(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [canonical(v) for v in value]
+    return value
+
+
+def _import_package(package: Path) -> str:
+    """Import a generated package from its directory under a fresh, unique name."""
+    name = f"_swarmgen_replay_{next(_unique)}_{package.name}"
+    spec = importlib.util.spec_from_file_location(
+        name, package / "__init__.py", submodule_search_locations=[str(package)]
+    )
+    if spec is None or spec.loader is None:
+        raise ReplayError(f"cannot import the generated package {package}")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return name
+
+
+def _run_asyncio(
+    package: Path, module_name: str, member: str, steps: Sequence[dict[str, Any]]
+) -> list[dict[str, Any]]:
+    name = _import_package(package)
+    try:
+        member_module: ModuleType = importlib.import_module(f"{name}.{module_name}")
+        runtime: ModuleType = importlib.import_module(f"{name}._runtime.replay")
+        trace: list[dict[str, Any]] = asyncio.run(
+            runtime.replay_async(member_module.build(), member, steps)
+        )
+        return trace
+    finally:
+        for key in [k for k in sys.modules if k == name or k.startswith(f"{name}.")]:
+            del sys.modules[key]
+
+
+def run_qt(document: Path, steps: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """Run an SCXML document in Qt SCXML through the steps (see scxml/qt_script.py)."""
+    env = {
+        k: v
+        for k, v in os.environ.items()
+        if not k.startswith("_ROS_WHEELS") and k != "LD_LIBRARY_PATH"
+    }
+    env["QT_QPA_PLATFORM"] = "offscreen"
+    try:
+        completed = subprocess.run(
+            [SYSTEM_PYTHON, str(QT_SCRIPT), "run", str(document), json.dumps(list(steps))],
+            capture_output=True,
+            text=True,
+            timeout=300,
+            env=env,
+            check=False,
+        )
+    except FileNotFoundError:
+        raise ReplayError(
+            f"{SYSTEM_PYTHON} not found: Qt SCXML needs Debian's python3-pyside2.qtscxml"
+        ) from None
+    if completed.returncode != 0:
+        raise ReplayError(f"Qt SCXML failed: {completed.stderr.strip().splitlines()[-1:]}")
+    records = [json.loads(line) for line in completed.stdout.splitlines() if line.strip()]
+    if records and "errors" in records[0]:
+        raise ReplayError(f"Qt SCXML cannot load {document.name}: {records[0]['errors']}")
+    return records
