@@ -22,6 +22,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from swarmgen import diagnostics as dg
 from swarmgen import pipeline
 from swarmgen.backends.asyncio_backend import member_modules, package_name
 from swarmgen.chart.lower import lower
@@ -76,7 +77,7 @@ def replay(
     model: Path, member: str, steps: Sequence[dict[str, Any]], backend: str
 ) -> list[dict[str, Any]]:
     validation = pipeline.validate(model)
-    if validation.model is None or pipeline.dg.has_errors(validation.diagnostics):
+    if validation.model is None or dg.has_errors(validation.diagnostics):
         raise ReplayError(f"{model}: the model has errors; run `swarmgen validate {model}`")
     charts = {c.member or c.name: c for c in lower(validation.model)}
     if member not in charts:

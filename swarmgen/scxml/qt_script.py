@@ -10,6 +10,7 @@ Standard library and PySide2 only: it must not import swarmgen.
 import json
 import os
 import sys
+from typing import Any
 
 
 def _load(paths: list[str]) -> None:
@@ -54,12 +55,12 @@ def _document(path: str) -> tuple[list[str], list[tuple[str, str]]]:
     return data, calls
 
 
-def _expand(step: dict) -> list:
+def _expand(step: dict[str, Any]) -> list[Any]:
     burst = step.get("burst")
     return list(burst) if isinstance(burst, list) else [step]
 
 
-def _describe(step: dict) -> str:
+def _describe(step: dict[str, Any]) -> str:
     if "burst" in step:
         return " + ".join(_describe(s) for s in _expand(step))
     if "complete" in step:
@@ -67,7 +68,7 @@ def _describe(step: dict) -> str:
     return str(step.get("event", "?"))
 
 
-def _submit(machine: object, step: dict, calls: list[tuple[str, str]]) -> None:
+def _submit(machine: object, step: dict[str, Any], calls: list[tuple[str, str]]) -> None:
     """The same rules as swarmgen.runtime.replay: a `complete` step ends the behaviour of the
     first active state (document order) that runs it, or of the state named."""
     if "complete" in step:
@@ -86,7 +87,7 @@ def _submit(machine: object, step: dict, calls: list[tuple[str, str]]) -> None:
     machine.submitEvent(str(step["event"]), step.get("data") or {})  # type: ignore[attr-defined]
 
 
-def _run(path: str, steps: list[dict]) -> None:
+def _run(path: str, steps: list[dict[str, Any]]) -> None:
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
     from PySide2.QtCore import QCoreApplication
     from PySide2.QtScxml import QScxmlStateMachine

@@ -42,9 +42,9 @@ def running_state(chart: Chart, active: set[str], behaviour: str, state: str | N
     """The active state that runs `behaviour` (first in document order), or the one named."""
     nodes = sorted(chart.nodes.values(), key=lambda n: n.order)
     for node in nodes:
-        if node.id in active and node.call is not None and node.call.behaviour == behaviour:
-            if state is None or node.id == state:
-                return node
+        runs = node.call is not None and node.call.behaviour == behaviour
+        if runs and node.id in active and (state is None or node.id == state):
+            return node
     return None
 
 
@@ -85,7 +85,7 @@ async def replay_async(
 ) -> list[dict[str, Any]]:
     """Run the member on asyncio (behaviours as tasks, cancellation on exit) step by step."""
     library = _ScenarioLibrary()
-    member = Member(chart, member_type, "replay", library, _NoBus())  # type: ignore[arg-type]
+    member = Member(chart, member_type, "replay", library, _NoBus())
     runner = asyncio.create_task(member.run())
     await _settle(member)
     trace = [_record(0, None, member)]
