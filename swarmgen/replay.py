@@ -76,6 +76,13 @@ def _check_step(path: Path, number: int, step: object) -> None:
 def replay(
     model: Path, member: str, steps: Sequence[dict[str, Any]], backend: str
 ) -> list[dict[str, Any]]:
+    return replay_many(model, member, [steps], backend)[0]
+
+
+def replay_many(
+    model: Path, member: str, scenarios: Sequence[Sequence[dict[str, Any]]], backend: str
+) -> list[list[dict[str, Any]]]:
+    """One trace per scenario; the model is compiled once and each scenario starts afresh."""
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         raise ReplayError(f"{model}: the model has errors; run `swarmgen validate {model}`")
@@ -90,12 +97,12 @@ def replay(
         pipeline.write_tree(result.files, out)
         chart = charts[member]
         if backend == "scxml":
-            trace = run_qt(out / "scxml" / f"{chart.name}.scxml", steps)
+            traces = run_qt_many(out / "scxml" / f"{chart.name}.scxml", scenarios)
         else:
-            package = out / "asyncio" / package_name(validation.model)
+            package = out / backend / package_name(validation.model)
             module_name = member_modules(tuple(charts.values()))[chart.name]
-            trace = _run_asyncio(package, module_name, member, steps)
-    return [canonical(record) for record in trace]
+            traces = _run_python(package, module_name, member, scenarios)
+    return [[canonical(record) for record in trace] for trace in traces]
 
 
 def canonical(value: Any) -> Any:
@@ -123,24 +130,46 @@ def _import_package(package: Path) -> str:
     return name
 
 
-def _run_asyncio(
-    package: Path, module_name: str, member: str, steps: Sequence[dict[str, Any]]
-) -> list[dict[str, Any]]:
+def _run_python(
+    package: Path, module_name: str, member: str, scenarios: Sequence[Sequence[dict[str, Any]]]
+) -> list[list[dict[str, Any]]]:
+    """Run a generated Python package's member module with its own vendored runtime."""
     name = _import_package(package)
     try:
         member_module: ModuleType = importlib.import_module(f"{name}.{module_name}")
         runtime: ModuleType = importlib.import_module(f"{name}._runtime.replay")
-        trace: list[dict[str, Any]] = asyncio.run(
-            runtime.replay_async(member_module.build(), member, steps)
-        )
-        return trace
+        return [
+            asyncio.run(runtime.replay_async(member_module.build(), member, steps))
+            for steps in scenarios
+        ]
     finally:
         for key in [k for k in sys.modules if k == name or k.startswith(f"{name}.")]:
             del sys.modules[key]
 
 
+def run_qt_many(
+    document: Path, scenarios: Sequence[Sequence[dict[str, Any]]]
+) -> list[list[dict[str, Any]]]:
+    """Run an SCXML document in Qt SCXML once per scenario, in one Qt process."""
+    with tempfile.NamedTemporaryFile("w", suffix=".json", delete=False) as handle:
+        json.dump([list(s) for s in scenarios], handle)
+    try:
+        records = _qt(["runmany", str(document), handle.name], document)
+    finally:
+        os.unlink(handle.name)
+    traces: list[list[dict[str, Any]]] = [[] for _ in scenarios]
+    for record in records:
+        traces[record.pop("scenario")].append(record)
+    return traces
+
+
 def run_qt(document: Path, steps: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     """Run an SCXML document in Qt SCXML through the steps (see scxml/qt_script.py)."""
+    return _qt(["run", str(document), json.dumps(list(steps))], document)
+
+
+def _qt(arguments: list[str], document: Path) -> list[dict[str, Any]]:
+    # the ROS wheels' bootstrap variables must not reach the system python
     env = {
         k: v
         for k, v in os.environ.items()
@@ -149,10 +178,10 @@ def run_qt(document: Path, steps: Sequence[dict[str, Any]]) -> list[dict[str, An
     env["QT_QPA_PLATFORM"] = "offscreen"
     try:
         completed = subprocess.run(
-            [SYSTEM_PYTHON, str(QT_SCRIPT), "run", str(document), json.dumps(list(steps))],
+            [SYSTEM_PYTHON, str(QT_SCRIPT), *arguments],
             capture_output=True,
             text=True,
-            timeout=300,
+            timeout=600,
             env=env,
             check=False,
         )

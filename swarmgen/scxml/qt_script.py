@@ -2,8 +2,10 @@
 
 Usage:
   python3 qt_script.py load FILE...      one JSON line per file: {"file", "errors", "active"}
-  python3 qt_script.py run FILE STEPS    STEPS is a JSON list of [event, data] pairs; prints one
-                                         JSON line per step: {"event", "active", "data"}
+  python3 qt_script.py run FILE STEPS    STEPS: a JSON list of steps (see swarmgen.runtime.replay);
+                                         one JSON line per step: {"step", "input", "active", "data"}
+  python3 qt_script.py runmany FILE PATH PATH: a JSON file holding a list of step lists; the lines
+                                         carry "scenario" (its index)
 Standard library and PySide2 only: it must not import swarmgen.
 """
 
@@ -87,7 +89,7 @@ def _submit(machine: object, step: dict[str, Any], calls: list[tuple[str, str]])
     machine.submitEvent(str(step["event"]), step.get("data") or {})  # type: ignore[attr-defined]
 
 
-def _run(path: str, steps: list[dict[str, Any]]) -> None:
+def _run(path: str, steps: list[dict[str, Any]], scenario: int | None = None) -> None:
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
     from PySide2.QtCore import QCoreApplication
     from PySide2.QtScxml import QScxmlStateMachine
@@ -101,21 +103,28 @@ def _run(path: str, steps: list[dict[str, Any]]) -> None:
     names, calls = _document(path)
     machine.start()
     _settle(app)
-    _report(machine, 0, None, names)
+    _report(machine, 0, None, names, scenario)
     for number, step in enumerate(steps, start=1):
         if isinstance(step, list):  # the older [event, data] form
             step = {"event": step[0], "data": step[1]}
         for item in _expand(step):
             _submit(machine, item, calls)
         _settle(app)
-        _report(machine, number, _describe(step), names)
+        _report(machine, number, _describe(step), names, scenario)
+    machine.stop()
+    machine.deleteLater()
+    _settle(app, 2)
 
 
-def _report(machine: object, number: int, described: object, names: list[str]) -> None:
+def _report(
+    machine: object, number: int, described: object, names: list[str], scenario: int | None
+) -> None:
     model = machine.dataModel()  # type: ignore[attr-defined]
     data = {n: model.scxmlProperty(n) for n in names}
     active = sorted(machine.activeStateNames(False))  # type: ignore[attr-defined]
     record = {"step": number, "input": described, "active": active, "data": data}
+    if scenario is not None:
+        record["scenario"] = scenario
     print(json.dumps(record, default=str), flush=True)
 
 
@@ -124,5 +133,11 @@ if __name__ == "__main__":
         _load(sys.argv[2:])
     elif len(sys.argv) == 4 and sys.argv[1] == "run":
         _run(sys.argv[2], json.loads(sys.argv[3]))
+    elif len(sys.argv) == 4 and sys.argv[1] == "runmany":
+        with open(sys.argv[3], encoding="utf-8") as scenarios:
+            for number, steps in enumerate(json.load(scenarios)):
+                _run(sys.argv[2], steps, number)
     else:
-        sys.exit("usage: qt_script.py load FILE... | run FILE STEPS_JSON")
+        sys.exit(
+            "usage: qt_script.py load FILE... | run FILE STEPS_JSON | runmany FILE SCENARIOS_FILE"
+        )
