@@ -64,15 +64,33 @@ class Node:
     depth: int = 0
     ancestors: tuple[Node, ...] = ()  # proper ancestors, innermost first (root included)
 
-    @property
-    def is_atomic(self) -> bool:
-        return self.kind in {"state", "final"} and not any(
-            c.kind != "history" for c in self.children
-        )
+    # Computed once by ChartBuilder.build(): the engine's hot path reads these.
+    is_atomic: bool = False
+    is_compound: bool = False
+    eventless: tuple[Transition, ...] = ()
+    _by_event: dict[str, tuple[Transition, ...]] = field(default_factory=dict)
+    _chain: dict[str | None, tuple[tuple[Node, tuple[Transition, ...]], ...]] = field(
+        default_factory=dict
+    )
 
-    @property
-    def is_compound(self) -> bool:
-        return self.kind in {"state", "scxml"} and any(c.kind != "history" for c in self.children)
+    def matching(self, name: str) -> tuple[Transition, ...]:
+        """This node's transitions whose descriptors match the event name, in document order."""
+        found = self._by_event.get(name)
+        if found is None:
+            found = tuple(t for t in self.transitions if t.events and t.matches(name))
+            self._by_event[name] = found
+        return found
+
+    def chain_candidates(self, name: str | None) -> tuple[tuple[Node, tuple[Transition, ...]], ...]:
+        """(owner, transitions) along this node and its ancestors that could react to the event
+        (`None`: eventless transitions); owners without candidates are left out."""
+        found = self._chain.get(name)
+        if found is None:
+            owners = (self, *self.ancestors)
+            pairs = ((o, o.eventless if name is None else o.matching(name)) for o in owners)
+            found = tuple((o, c) for o, c in pairs if c)
+            self._chain[name] = found
+        return found
 
     def __repr__(self) -> str:
         return f"<{self.kind} {self.id}>"
@@ -208,6 +226,9 @@ class ChartBuilder:
         while stack:  # document order, depth and ancestors
             node, depth, ancestors = stack.pop()
             node.order, node.depth, node.ancestors = order, depth, ancestors
+            proper = any(c.kind != "history" for c in node.children)
+            node.is_atomic = node.kind in {"state", "final"} and not proper
+            node.is_compound = node.kind in {"state", "scxml"} and proper
             order += 1
             for child in reversed(node.children):
                 stack.append((child, depth + 1, (node, *ancestors)))
@@ -218,6 +239,8 @@ class ChartBuilder:
                     node, events, tuple(self._lookup(t) for t in targets), order=number, **options
                 )
             )
+        for node in self._nodes.values():
+            node.eventless = tuple(t for t in node.transitions if not t.events)
         for parent, targets, action in self._initials:
             owner = self._lookup(parent) if parent is not None else self._root
             owner.initial = Transition(

@@ -120,10 +120,14 @@ class Member:
         try:
             while self.engine.running:
                 event = await self.queue.get()
+                while event is not None:  # drain what is queued without yielding per event
+                    self.engine.send(event)
+                    self._trace(event)
+                    if not self.engine.running or self.queue.empty():
+                        break
+                    event = self.queue.get_nowait()
                 if event is None:
                     break
-                self.engine.send(event)
-                self._trace(event)
         finally:
             await self._cancel_all()
 

@@ -87,6 +87,7 @@ class Engine:
         self._activation: dict[Node, int] = {}
         self._ids = itertools.count(1)
         self._active_ids: frozenset[str] | None = None
+        self._atomic: list[Node] | None = None  # atomic states of the configuration, in order
 
     # --- public
 
@@ -174,27 +175,25 @@ class Engine:
         node = self.chart.nodes.get(origin[0])
         return node is not None and node in self.config and self._activation.get(node) == origin[1]
 
+    def _atomic_states(self) -> list[Node]:
+        if self._atomic is None:
+            self._atomic = sorted((n for n in self.config if n.is_atomic), key=_document_order)
+        return self._atomic
+
     def _select_transitions(self, event: Event | None) -> list[Transition]:
         enabled: list[Transition] = []
-        seen: set[int] = set()
-        atomic = sorted((n for n in self.config if n.is_atomic), key=_document_order)
-        for state in atomic:
-            for owner in (state, *state.ancestors):
-                chosen = self._first_enabled(owner, event)
+        name = None if event is None else event.name
+        for state in self._atomic_states():
+            for owner, candidates in state.chain_candidates(name):
+                chosen = self._first_enabled(owner, candidates)
                 if chosen is not None:
-                    if id(chosen) not in seen:
-                        seen.add(id(chosen))
+                    if chosen not in enabled:
                         enabled.append(chosen)
                     break
-        return self._remove_conflicts(enabled)
+        return self._remove_conflicts(enabled) if len(enabled) > 1 else enabled
 
-    def _first_enabled(self, owner: Node, event: Event | None) -> Transition | None:
-        for transition in owner.transitions:
-            if event is None:
-                if transition.events:
-                    continue
-            elif not transition.events or not transition.matches(event.name):
-                continue
+    def _first_enabled(self, owner: Node, candidates: tuple[Transition, ...]) -> Transition | None:
+        for transition in candidates:
             if (
                 transition.cond is None
                 or self._guarded(transition.cond, f"guard in {owner.id}") is True
@@ -227,6 +226,7 @@ class Engine:
             self._run(transition.action, f"transition from {transition.source.id}")
         self._enter_states(enabled)
         self._active_ids = None
+        self._atomic = None
 
     def _exit_set(self, transitions: Iterable[Transition]) -> set[Node]:
         to_exit: set[Node] = set()
@@ -260,6 +260,7 @@ class Engine:
             self._run(state.onexit, f"exit of {state.id}")
             self.config.discard(state)
         self._active_ids = None
+        self._atomic = None
 
     def _enter_states(self, enabled: list[Transition]) -> None:
         to_enter: set[Node] = set()
@@ -274,6 +275,7 @@ class Engine:
         for state in sorted(to_enter, key=_document_order):
             self.config.add(state)
             self._active_ids = None
+            self._atomic = None
             self._to_invoke.add(state)
             self._run(state.onentry, f"entry of {state.id}")
             for event, delay in state.timers:
