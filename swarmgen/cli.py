@@ -56,7 +56,12 @@ def _debug() -> bool:
 
 
 def _emit_diagnostics(diagnostics: list[dg.Diagnostic], fmt: str, *, to_stdout: bool) -> None:
-    text = dg.render_json(diagnostics) if fmt == "json" else dg.render_text(diagnostics)
+    if fmt == "json":
+        text = dg.render_json(diagnostics)
+    elif fmt == "sarif":
+        text = dg.render_sarif(diagnostics, __version__)
+    else:
+        text = dg.render_text(diagnostics)
     if text:
         click.echo(text, nl=False, err=not to_stdout)
 
@@ -65,10 +70,18 @@ MODEL = click.argument("model", type=click.Path(path_type=Path))
 FORMAT = click.option(
     "--format",
     "fmt",
-    type=click.Choice(["text", "json"]),
+    type=click.Choice(["text", "json", "sarif"]),
     default="text",
     show_default=True,
-    help="How diagnostics are printed.",
+    help="How diagnostics are printed (SARIF 2.1.0 for code-scanning tools).",
+)
+STRICT = click.option("--strict", is_flag=True, help="Treat warnings as errors.")
+DISABLE = click.option(
+    "--disable",
+    "disabled",
+    multiple=True,
+    metavar="CODE",
+    help="Do not report this diagnostic code (repeatable), e.g. --disable SG205.",
 )
 
 
@@ -81,13 +94,23 @@ def main() -> None:
 @main.command()
 @MODEL
 @FORMAT
+@STRICT
+@DISABLE
 @_guarded
-def validate(model: Path, fmt: str) -> None:
+def validate(model: Path, fmt: str, strict: bool, disabled: tuple[str, ...]) -> None:
     """Check MODEL and print its diagnostics (exit 0 clean, 1 errors, 2 unreadable)."""
+    _check_codes(disabled)
     result = pipeline.validate(model)
-    _emit_diagnostics(result.diagnostics, fmt, to_stdout=True)
-    click.echo(f"swarmgen: {model}: {dg.summary_line(result.diagnostics)}", err=True)
-    sys.exit(result.exit_code)
+    diagnostics = dg.apply_options(result.diagnostics, strict=strict, disabled=disabled)
+    _emit_diagnostics(diagnostics, fmt, to_stdout=True)
+    click.echo(f"swarmgen: {model}: {dg.summary_line(diagnostics)}", err=True)
+    sys.exit(dg.exit_code_for(diagnostics))
+
+
+def _check_codes(codes: tuple[str, ...]) -> None:
+    unknown = [c for c in codes if c.upper() not in dg.CODES]
+    if unknown:
+        raise click.BadParameter(f"unknown code(s) {', '.join(unknown)}", param_hint="--disable")
 
 
 @main.command(name="compile")
@@ -97,12 +120,23 @@ def validate(model: Path, fmt: str) -> None:
 )
 @click.option("--check", is_flag=True, help="Write nothing; exit 1 with a diff if OUTPUT is stale.")
 @FORMAT
+@STRICT
+@DISABLE
 @_guarded
-def compile_(model: Path, output: Path, check: bool, fmt: str) -> None:
+def compile_(
+    model: Path, output: Path, check: bool, fmt: str, strict: bool, disabled: tuple[str, ...]
+) -> None:
     """Compile MODEL into OUTPUT (SCXML per member type), replacing it atomically."""
+    _check_codes(disabled)
     result = pipeline.compile_model(model)
-    diagnostics = result.validation.diagnostics
+    diagnostics = dg.apply_options(result.validation.diagnostics, strict=strict, disabled=disabled)
     _emit_diagnostics(diagnostics, fmt, to_stdout=False)
+    if dg.has_errors(diagnostics) and result.files:
+        click.echo(
+            f"swarmgen: {model}: {dg.summary_line(diagnostics)} (--strict); nothing written",
+            err=True,
+        )
+        sys.exit(dg.ExitCode.MODEL_ERRORS)
     if not result.files:
         click.echo(f"swarmgen: {model}: {dg.summary_line(diagnostics)}; nothing written", err=True)
         sys.exit(result.validation.exit_code or dg.ExitCode.MODEL_ERRORS)

@@ -260,3 +260,92 @@ def summary_line(diagnostics: Sequence[Diagnostic]) -> str:
     errors = sum(d.level is Severity.ERROR for d in diagnostics)
     warnings = sum(d.level is Severity.WARNING for d in diagnostics)
     return f"{errors} error(s), {warnings} warning(s)"
+
+
+SARIF_SCHEMA = "https://json.schemastore.org/sarif-2.1.0.json"
+_SARIF_LEVEL = {Severity.ERROR: "error", Severity.WARNING: "warning", Severity.NOTE: "note"}
+
+
+def render_sarif(diagnostics: Sequence[Diagnostic], version: str) -> str:
+    """SARIF 2.1.0, as code-scanning services read it: one run, the rules used, one result per
+    diagnostic with its physical location (relative path when under the current directory)."""
+    used = sorted({d.code.id for d in diagnostics})
+    rules = [
+        {
+            "id": CODES[code].id,
+            "name": CODES[code].name,
+            "shortDescription": {"text": CODES[code].summary},
+            "defaultConfiguration": {"level": _SARIF_LEVEL[CODES[code].severity]},
+            "help": {"text": f"see docs/diagnostics.md, code {code}"},
+        }
+        for code in used
+    ]
+    results = [_sarif_result(d, used.index(d.code.id)) for d in diagnostics]
+    log = {
+        "$schema": SARIF_SCHEMA,
+        "version": "2.1.0",
+        "runs": [
+            {
+                "tool": {
+                    "driver": {
+                        "name": "swarmgen",
+                        "version": version,
+                        "rules": rules,
+                    }
+                },
+                "columnKind": "unicodeCodePoints",
+                "results": results,
+            }
+        ],
+    }
+    return json.dumps(log, indent=2, ensure_ascii=False) + "\n"
+
+
+def _sarif_result(d: Diagnostic, rule_index: int) -> dict[str, object]:
+    message = d.message
+    if d.notes:
+        message += "\n" + "\n".join(f"note: {n}" for n in d.notes)
+    if d.hint:
+        message += f"\nhint: {d.hint}"
+    region: dict[str, int] = {}
+    if d.span.line > 0:
+        region = {"startLine": d.span.line, "startColumn": max(d.span.col, 1)}
+    location: dict[str, object] = {"artifactLocation": {"uri": _sarif_uri(d.span.file)}}
+    if region:
+        location["region"] = region
+    result: dict[str, object] = {
+        "ruleId": d.code.id,
+        "ruleIndex": rule_index,
+        "level": _SARIF_LEVEL[d.level],
+        "message": {"text": message},
+        "locations": [{"physicalLocation": location}],
+    }
+    if d.span.path or d.span.xmi_id:
+        logical = {"fullyQualifiedName": d.span.path or "", "name": d.span.xmi_id or ""}
+        result["locations"][0]["logicalLocations"] = [logical]  # type: ignore[index]
+    return result
+
+
+def _sarif_uri(file: str) -> str:
+    path = Path(file)
+    try:
+        return path.resolve().relative_to(Path.cwd().resolve()).as_posix()
+    except ValueError:
+        return path.resolve().as_uri()
+
+
+def apply_options(
+    diagnostics: Sequence[Diagnostic], *, strict: bool = False, disabled: Iterable[str] = ()
+) -> list[Diagnostic]:
+    """`--disable CODE` drops a code (input errors cannot be disabled); `--strict` makes
+    warnings errors."""
+    off = {c.upper() for c in disabled}
+    kept = [d for d in diagnostics if d.code.id not in off or d.code.input_error]
+    if strict:
+        kept = [
+            Diagnostic(d.code, d.message, d.span, Severity.ERROR, d.hint, d.notes)
+            if d.level is Severity.WARNING
+            else d
+            for d in kept
+        ]
+    return kept

@@ -155,3 +155,37 @@ def test_every_diagnostic_code_is_documented() -> None:
     doc = (ROOT / "docs" / "diagnostics.md").read_text()
     missing = [c.id for c in CODES.values() if f"| {c.id} | `{c.name}` |" not in doc]
     assert not missing, f"add these codes to docs/diagnostics.md: {missing}"
+
+
+def test_sarif_output() -> None:
+    sample = "../shared/reference/xmi_samples/papyrus_spring-sm_simple-timers.uml"
+    result = run_cli("validate", sample, "--format", "sarif")
+    assert result.returncode == 0
+    log = json.loads(result.stdout)
+    assert log["version"] == "2.1.0" and log["$schema"].endswith("sarif-2.1.0.json")
+    (run,) = log["runs"]
+    assert run["tool"]["driver"]["name"] == "swarmgen"
+    assert [r["id"] for r in run["tool"]["driver"]["rules"]] == ["SG114"]
+    results = run["results"]
+    assert len(results) == 2
+    for item in results:
+        assert item["ruleId"] == "SG114" and item["level"] == "warning"
+        region = item["locations"][0]["physicalLocation"]["region"]
+        assert region["startLine"] > 0 and region["startColumn"] > 0
+
+
+def test_strict_and_disable() -> None:
+    sample = "../shared/reference/xmi_samples/papyrus_spring-sm_simple-timers.uml"
+    assert run_cli("validate", sample).returncode == 0  # two warnings
+    strict = run_cli("validate", sample, "--strict")
+    assert strict.returncode == 1 and ": error: " in strict.stdout
+    quiet = run_cli("validate", sample, "--disable", "SG114", "--strict")
+    assert quiet.returncode == 0 and quiet.stdout == ""
+    assert run_cli("validate", sample, "--disable", "SG999").returncode == 2
+
+
+def test_strict_compile_writes_nothing(tmp_path: Path) -> None:
+    sample = "../shared/reference/xmi_samples/papyrus_spring-sm_simple-timers.uml"
+    result = run_cli("compile", sample, "-o", str(tmp_path / "out"), "--strict")
+    assert result.returncode == 1
+    assert not (tmp_path / "out").exists()
