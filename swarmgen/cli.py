@@ -191,8 +191,8 @@ def schema(output: Path, check: bool) -> None:
     "--script", "scenario", type=click.Path(path_type=Path), required=True, help="Scenario (JSON)."
 )
 @click.option(
-    "--backend", type=click.Choice(["asyncio", "scxml"]), default="asyncio", show_default=True,
-    help="Where to run: the generated asyncio code, or the SCXML in Qt SCXML.",
+    "--backend", type=click.Choice(["asyncio", "smach", "scxml", "rclpy"]), default="asyncio", show_default=True,
+    help="Where to run: the generated asyncio, smach or rclpy code, or the SCXML in Qt SCXML.",
 )  # fmt: skip
 @_guarded
 def replay(model: Path, member: str, scenario: Path, backend: str) -> None:

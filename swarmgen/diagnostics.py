@@ -134,6 +134,63 @@ EVENT_ARGUMENT = _code(
     "SG120", "event-argument", "raise/send gives a field the event does not have"
 )
 MACHINE_TOO_DEEP = _code("SG121", "nesting-too-deep", "states nested deeper than the limit")
+# --- analysis: swarm bugs before flight
+UNREACHABLE_STATE = _code(
+    "SG201",
+    "unreachable-state",
+    "no path from the initial state reaches the state",
+    Severity.WARNING,
+)
+NO_WAY_OUT = _code(
+    "SG202", "no-way-out", "a state that is not final has no way out", Severity.WARNING
+)
+NEVER_ENDS = _code(
+    "SG203", "never-ends", "a member's machine can never reach a final state", Severity.WARNING
+)
+NONDETERMINISTIC = _code(
+    "SG204",
+    "nondeterministic",
+    "two transitions on one trigger whose guards can both hold",
+    Severity.WARNING,
+)
+UNHANDLED_OUTCOME = _code(
+    "SG205",
+    "unhandled-outcome",
+    "a behaviour outcome that no transition of its state handles",
+    Severity.WARNING,
+)
+NEVER_SENT = _code(
+    "SG206", "event-never-sent", "a trigger on an event that nobody sends", Severity.WARNING
+)
+NEVER_HANDLED = _code(
+    "SG207",
+    "event-never-handled",
+    "an event is sent but no member type reacts to it",
+    Severity.WARNING,
+)
+TYPE_ERROR = _code("SG208", "type-error", "an expression combines values of incompatible types")
+INPUT_MAYBE_UNSET = _code(
+    "SG209",
+    "input-maybe-unset",
+    "a behaviour input may be unset when its state is entered",
+    Severity.WARNING,
+)
+OUTPUT_UNUSED = _code(
+    "SG210",
+    "output-unused",
+    "a behaviour output is written to member data nobody reads",
+    Severity.NOTE,
+)
+MISSING_CAPABILITY = _code(
+    "SG211", "missing-capability", "a behaviour requires hardware the member type does not have"
+)
+MISSING_PARAMETER = _code(
+    "SG212",
+    "missing-parameter",
+    "a behaviour input is neither bound, member data nor a hardware parameter",
+)
+BAD_COUNT = _code("SG214", "bad-member-count", "a swarm has fewer than one member of a type")
+ROS_NAME_COLLISION = _code("SG215", "ros-name-collision", "two elements get the same ROS name")
 
 
 @dataclass(frozen=True)

@@ -143,11 +143,33 @@ class _Lowering:
         )
 
     def _collect_data(self) -> None:
-        for machine in self.index.reachable_machines(self.root):
+        machines = self.index.reachable_machines(self.root)
+        for machine in machines:
             for name, prop in self.index.data_scope[machine.id].items():
                 self.data.setdefault(name, prop)
+        if self.member is not None:  # inputs taken from hardware parameters become data too
+            parameters = self.index.hardware_parameters(self.member)
+            for behaviour, bound in self._calls(machines):
+                for prop in behaviour.inputs:
+                    if (
+                        prop.name not in bound
+                        and prop.name not in self.data
+                        and prop.name in parameters
+                    ):
+                        self.data[prop.name] = parameters[prop.name]
         for name in sorted(self.data):
             self.ids.claim(self.data[name].ident)
+
+    def _calls(self, machines: list[Machine]) -> list[tuple[Behaviour, set[str]]]:
+        found = []
+        for machine in machines:
+            for placed in walk(machine):
+                vertex = placed.vertex
+                if isinstance(vertex, State) and vertex.activity is not None:
+                    behaviour = self.index.behaviours.get(vertex.activity.behaviour)
+                    if behaviour is not None:
+                        found.append((behaviour, {b.name for b in vertex.activity.bindings}))
+        return found
 
     def _needs_terminate(self) -> bool:
         return any(

@@ -4,14 +4,19 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from swarmgen.check.determinism import check_determinism
+from swarmgen.check.events import check_events, check_unhandled_outcomes
 from swarmgen.check.expressions import check_expressions
+from swarmgen.check.hardware import check_capabilities, check_parameters
 from swarmgen.check.naming import check_collisions
+from swarmgen.check.reachability import check_reachability
 from swarmgen.check.structure import (
     check_initial_states,
     check_outcomes,
     check_pseudostates,
     check_submachines,
 )
+from swarmgen.check.swarm import check_counts, check_ros_names
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model
 
@@ -24,6 +29,14 @@ RULES: tuple[Rule, ...] = (
     check_outcomes,
     check_expressions,
     check_collisions,
+    check_reachability,
+    check_determinism,
+    check_unhandled_outcomes,
+    check_events,
+    check_capabilities,
+    check_parameters,
+    check_counts,
+    check_ros_names,
 )
 
 

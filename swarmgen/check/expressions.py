@@ -175,14 +175,5 @@ def _bindings(index: ModelIndex, state: State, scope: dict[str, Property]) -> li
         found.extend(
             _names(binding.value, scope, _NO_EVENT, state.activity.span, "argument binding")
         )
-    bound = {b.name for b in state.activity.bindings}
-    for missing in sorted(inputs - bound - scope.keys()):
-        found.append(
-            dg.diag(
-                dg.BINDING_ERROR,
-                f"input '{missing}' of '{behaviour.name}' is neither bound nor member data",
-                state.activity.span,
-                hint=f"bind it in the doActivity body (`{missing} = ...`) or declare member data '{missing}'",
-            )
-        )
+    # inputs that are neither bound nor member data: see hardware.check_parameters (per member)
     return found

@@ -48,7 +48,7 @@ from swarmgen.span import Span
 
 _HARDWARE = {k.value: k for k in HardwareKind}
 _BEHAVIOURS = {k.value: k for k in BehaviourKind}
-_BEHAVIOUR_TAGS = frozenset({"requires", "outcomes", "rosKind", "rosName", "rosType"})
+_BEHAVIOUR_TAGS = frozenset({"requires", "outcomes", "emits", "rosKind", "rosName", "rosType"})
 KNOWN_STEREOTYPES: dict[str, frozenset[str]] = {
     "Swarm": frozenset(),
     "SwarmMember": frozenset({"role"}),
@@ -445,6 +445,7 @@ def _behaviour(b: _Builder, element: RawElement) -> Behaviour | None:
         outputs=tuple(b.prop(p) for p in outputs),
         outcomes=outcomes,
         requires=tuple(_requires(b, app)),
+        emits=tuple(dict.fromkeys(app.tags.get("emits", "").replace(",", " ").split())),
         ros=ros,
         span=element.span,
     )

@@ -124,6 +124,7 @@ class Behaviour(Node):
     outputs: tuple[Property, ...]
     outcomes: tuple[str, ...]
     requires: tuple[str, ...]
+    emits: tuple[str, ...] = ()  # events the behaviour sends (the `emits` tag, docs/profile.md)
     ros: RosBinding | None = None
     span: Span
 

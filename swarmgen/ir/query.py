@@ -111,6 +111,31 @@ class ModelIndex:
                     found.append(behaviour)
         return found
 
+    def hardware_parameters(self, member: MemberType) -> dict[str, Property]:
+        """Parameters of the member type's hardware components, by name (first part wins)."""
+        components = {h.id: h for h in self.model.hardware}
+        found: dict[str, Property] = {}
+        for part in member.hardware:
+            component = components.get(part.type_id)
+            if component is not None:
+                for parameter in component.parameters:
+                    found.setdefault(parameter.name, parameter)
+        return found
+
+    def capabilities(self, member: MemberType) -> dict[str, str]:
+        """Capability (class name, own or inherited) -> the part that provides it."""
+        components = {h.id: h for h in self.model.hardware}
+        found: dict[str, str] = {}
+        for part in member.hardware:
+            component = components.get(part.type_id)
+            names = component.capabilities if component is not None else (part.type_name,)
+            for name in names:
+                found.setdefault(name, part.name)
+        return found
+
+    def members_running(self, machine: Machine) -> list[MemberType]:
+        return [m for m in self.model.member_types if machine in self.member_machines(m)]
+
     def member_machines(self, member: MemberType) -> list[Machine]:
         root = self.machines.get(member.machine or "")
         return self.reachable_machines(root) if root is not None else []

@@ -1,0 +1,98 @@
+"""Events and outcomes across the swarm: triggers nobody can fire, sends nobody hears, and
+behaviour outcomes a state does not handle."""
+
+from __future__ import annotations
+
+from swarmgen import diagnostics as dg
+from swarmgen.diagnostics import Diagnostic
+from swarmgen.ir import expr
+from swarmgen.ir.nodes import Model, State, TriggerKind
+from swarmgen.ir.query import ModelIndex, walk
+
+# `preempted` ends a behaviour only because its state is being left: nobody waits for it.
+_UNWAITED = {"preempted"}
+
+
+def _sent_by_members(model: Model) -> set[str]:
+    """Events that effects send or raise, or that library behaviours emit (`emits` tag)."""
+    sent = {name for b in model.behaviours for name in b.emits}
+    for machine in model.machines:
+        actions = [a for t in machine.transitions for a in t.effect]
+        for placed in walk(machine):
+            if isinstance(placed.vertex, State):
+                actions += [*placed.vertex.entry, *placed.vertex.exit]
+        sent |= {a.event for a in actions if isinstance(a, expr.Raise | expr.Send)}
+    return sent
+
+
+def check_events(model: Model) -> list[Diagnostic]:
+    if not any(e.swarm_event for e in model.events):
+        return []  # plain UML models: their environment sends the signals
+    sent = _sent_by_members(model)
+    station = {e.name for e in model.events if e.sender == "station"}
+    triggered: dict[str, list[object]] = {}
+    found: list[Diagnostic] = []
+    for machine in model.machines:
+        for transition in machine.transitions:
+            for trigger in transition.triggers:
+                if trigger.kind != TriggerKind.EVENT:
+                    continue
+                triggered.setdefault(trigger.name, []).append(trigger)
+                if trigger.name not in sent and trigger.name not in station:
+                    found.append(
+                        dg.diag(
+                            dg.NEVER_SENT,
+                            f"transition waits for '{trigger.name}', which nobody sends",
+                            trigger.span,
+                            hint=f"set sender=station on '{trigger.name}', send it from an effect "
+                            "(`send ...`), or name it in the `emits` tag of the behaviour that sends it",
+                        )
+                    )
+    for event in model.events:
+        if (event.name in sent or event.name in station) and event.name not in triggered:
+            found.append(
+                dg.diag(
+                    dg.NEVER_HANDLED,
+                    f"event '{event.name}' is sent, but no member type reacts to it",
+                    event.span,
+                    hint="add a transition on it, or stop sending it",
+                )
+            )
+    return found
+
+
+def check_unhandled_outcomes(model: Model) -> list[Diagnostic]:
+    """A state that handles some outcomes of its behaviour should handle all it can produce;
+    a state that handles none treats its behaviour as running until preempted."""
+    index = ModelIndex(model)
+    found: list[Diagnostic] = []
+    for machine in model.machines:
+        leaving: dict[str, list[object]] = {}
+        for transition in machine.transitions:
+            leaving.setdefault(transition.source, []).append(transition)
+        for placed in walk(machine):
+            state = placed.vertex
+            if not isinstance(state, State) or state.activity is None:
+                continue
+            transitions = [t for t in machine.transitions if t.source == state.id]
+            if any(not t.triggers for t in transitions):
+                continue  # a completion transition handles every outcome
+            handled = {
+                tr.name for t in transitions for tr in t.triggers if tr.kind == TriggerKind.OUTCOME
+            }
+            if not handled:
+                continue
+            behaviour = index.behaviours[state.activity.behaviour]
+            for outcome in behaviour.outcomes:
+                if outcome in handled or outcome in _UNWAITED:
+                    continue
+                found.append(
+                    dg.diag(
+                        dg.UNHANDLED_OUTCOME,
+                        f"'{state.name}' handles {', '.join(sorted(handled))} of '{behaviour.name}' "
+                        f"but not '{outcome}': the state would be stuck with a finished behaviour",
+                        state.span,
+                        hint=f"add a transition from '{state.name}' on '{outcome}'",
+                    )
+                )
+    return found
