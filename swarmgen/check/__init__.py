@@ -17,6 +17,7 @@ from swarmgen.check.structure import (
     check_submachines,
 )
 from swarmgen.check.swarm import check_counts, check_ros_names
+from swarmgen.check.types import check_types
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model
 
@@ -37,6 +38,7 @@ RULES: tuple[Rule, ...] = (
     check_parameters,
     check_counts,
     check_ros_names,
+    check_types,
 )
 
 
