@@ -25,7 +25,7 @@ def base(
     kit.hardware("Flight", "Controller")
     kit.behaviour("TakeOff", "HardwareFunction", inputs={"altitude": "Real"}, requires=["Flight"])
     kit.behaviour("Coverage", outputs={"target": "Integer"}, requires=["Camera"])
-    kit.behaviour("Land", "HardwareFunction", requires=["Flight"])
+    kit.behaviour("Land", "HardwareFunction", inputs={"target": "Integer"}, requires=["Flight"])
     kit.event("launch", sender="station")
     kit.event("missionAbort", sender="station")
     m = kit.machine("Mission")
@@ -46,7 +46,8 @@ def base(
         "UAV",
         machine=m,
         parts={"cam": "DownCam", "fc": "Flight"},
-        data={"altitude": ("Real", 1.5), "target": ("Integer", 0), "level": ("Integer", 0)},
+        data={"altitude": ("Real", 1.5), "target": ("Integer", 0), "level": ("Integer", 0)}
+        | getattr(kit, "extra_data", {}),
     )
     kit.swarm("Swarm", {"UAV": 2})
     return kit
@@ -155,9 +156,19 @@ def _parameter_from_hardware(kit: ModelKit, m: Machine) -> None:
 
 
 def _input_maybe_unset(kit: ModelKit, m: Machine) -> None:
-    kit.behaviours["Land"]["inputs"] = {"spot": "Pose"}
-    # `spot` is member data without a default, set only on one path into Down
-    t(m, "Cover", "Down").effect = "spot = spot"
+    # `spot` is member data without a default, set on the way Cover -> Down only
+    kit.behaviours["Land"]["inputs"] = {"target": "Integer", "spot": "Integer"}
+    kit.extra_data = {"spot": ("Integer", None)}  # type: ignore[attr-defined]
+    t(m, "Cover", "Down").effect = "spot = 3"
+
+
+def _input_always_set(kit: ModelKit, m: Machine) -> None:
+    _input_maybe_unset(kit, m)
+    t(m, "Up", "Down").effect = "spot = 4"
+
+
+def _output_unused(kit: ModelKit, m: Machine) -> None:
+    kit.behaviours["Land"]["inputs"] = {}
 
 
 CASES: list[tuple[str, Callable[[ModelKit, Machine], None], str | None]] = [
@@ -177,7 +188,18 @@ CASES: list[tuple[str, Callable[[ModelKit, Machine], None], str | None]] = [
     ("missing-capability", _missing_capability, "SG211"),
     ("missing-parameter", _missing_parameter, "SG212"),
     ("parameter-from-hardware", _parameter_from_hardware, None),
+    ("input-maybe-unset", _input_maybe_unset, "SG209"),
+    ("input-always-set", _input_always_set, None),
+    ("output-unused", _output_unused, "SG210"),
 ]
+
+
+def test_unset_input_path(tmp_path: Path) -> None:
+    (diag,) = [d for d in diagnostics(base(_input_maybe_unset), tmp_path) if d.code.id == "SG209"]
+    assert "'spot'" in diag.message
+    assert diag.notes == (
+        "a path that never assigns it: Idle -> [launch] -> Up -> [outcome.Up.aborted] -> Down",
+    )
 
 
 @pytest.mark.parametrize(("change", "expected"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])

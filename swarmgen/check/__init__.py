@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from swarmgen.check.dataflow import check_dataflow
 from swarmgen.check.determinism import check_determinism
 from swarmgen.check.events import check_events, check_unhandled_outcomes
 from swarmgen.check.expressions import check_expressions
@@ -39,6 +40,7 @@ RULES: tuple[Rule, ...] = (
     check_counts,
     check_ros_names,
     check_types,
+    check_dataflow,
 )
 
 

@@ -1,0 +1,213 @@
+"""Data flow over each member's lowered statechart (submachines inlined):
+
+- SG209: a behaviour reads member data (a bound expression, or an input read by name) that has no
+  default and that some path from the start reaches the state without assigning; one such path
+  is reported.
+- SG210: a behaviour output is written to member data that nothing reads (note).
+
+The graph goes from atomic state to atomic state: a transition of a state applies in all its
+descendants; entering a target enters its default descendants. Assignments are effects, entry
+actions, initial transitions and behaviour outputs written back on outcomes.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+from swarmgen import diagnostics as dg
+from swarmgen.chart import model as c
+from swarmgen.chart.lower import lower
+from swarmgen.check.structure import check_submachines
+from swarmgen.diagnostics import Diagnostic
+from swarmgen.ir import expr
+from swarmgen.ir.nodes import Model
+from swarmgen.span import Span
+
+
+@dataclass(frozen=True)
+class _Edge:
+    target: str
+    assigns: frozenset[str]
+    label: str
+
+
+def check_dataflow(model: Model) -> list[Diagnostic]:
+    if check_submachines(model):
+        return []  # a cyclic model cannot be lowered; SG104 says why
+    try:
+        charts = lower(model)
+    except (KeyError, ValueError, RecursionError):
+        return []  # structural errors reported by other checks
+    found: list[Diagnostic] = []
+    for chart in charts:
+        found += _chart(model, chart)
+    return found
+
+
+def _chart(model: Model, chart: c.Chart) -> list[Diagnostic]:
+    nodes = {n.id: n for n in chart.walk()}
+    parents = {child.id: node.id for node in nodes.values() for child in node.children}
+    graph = _Graph(nodes, parents)
+    start = [leaf for target in chart.initial for leaf in graph.entry_leaves(target)]
+    undefined = {d.id for d in chart.data if d.default is None}
+    spans = _spans(model)
+    found = []
+    for node in nodes.values():
+        if node.call is None:
+            continue
+        read = sorted({n for arg in node.call.args for n in _names(arg.value, chart)} & undefined)
+        for name in read:
+            path = graph.path_without(start, node.id, name)
+            if path is not None:
+                found.append(
+                    dg.diag(
+                        dg.INPUT_MAYBE_UNSET,
+                        f"'{node.call.behaviour}' in '{node.name or node.id}' reads '{name}', which may be "
+                        "unset (no default, not assigned on every path)",
+                        spans.get(node.name or "", Span(file=model.source)),
+                        notes=["a path that never assigns it: " + " -> ".join(path)],
+                        hint=f"give '{name}' a default value, or assign it on the way (an effect `{name} = ...`)",
+                    )
+                )
+    return found + _unused_outputs(model, chart, nodes, spans)
+
+
+def _unused_outputs(
+    model: Model, chart: c.Chart, nodes: dict[str, c.Node], spans: dict[str, Span]
+) -> list[Diagnostic]:
+    read: set[str] = set()
+    for node in nodes.values():
+        for transition in (*node.transitions, *([node.initial] if node.initial else [])):
+            if transition.cond is not None:
+                read |= _names(transition.cond, chart)
+            read |= _action_reads(transition.actions, chart)
+        read |= _action_reads((*node.onentry, *node.onexit), chart)
+        if node.call is not None:
+            read |= {n for arg in node.call.args for n in _names(arg.value, chart)}
+    found = []
+    reported: set[tuple[str, str]] = set()
+    for node in nodes.values():
+        if node.call is None:
+            continue
+        for output, location in node.call.results:
+            if location in read or (node.call.behaviour, output) in reported:
+                continue
+            reported.add((node.call.behaviour, output))
+            found.append(
+                dg.diag(
+                    dg.OUTPUT_UNUSED,
+                    f"output '{output}' of '{node.call.behaviour}' is written to '{location}', which "
+                    f"nothing in '{chart.member or chart.name}' reads",
+                    spans.get(node.name or "", Span(file=model.source)),
+                )
+            )
+    return found
+
+
+def _names(e: expr.Expr, chart: c.Chart) -> set[str]:
+    ids = {d.name: d.id for d in chart.data}
+    return {ids.get(n, n) for n in expr.free_names(e)}
+
+
+def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
+    read: set[str] = set()
+    for action in actions:
+        if isinstance(action, c.Assign):
+            read |= _names(action.value, chart)
+        elif isinstance(action, c.Raise | c.Send):
+            for param in action.params:
+                read |= _names(param.value, chart)
+    return read
+
+
+def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
+    return {a.location for a in actions if isinstance(a, c.Assign | c.WriteBack)}
+
+
+def _spans(model: Model) -> dict[str, Span]:
+    from swarmgen.ir.nodes import State
+    from swarmgen.ir.query import walk
+
+    return {
+        p.vertex.name: p.vertex.span
+        for m in model.machines
+        for p in walk(m)
+        if isinstance(p.vertex, State)
+    }
+
+
+class _Graph:
+    def __init__(self, nodes: dict[str, c.Node], parents: dict[str, str]) -> None:
+        self.nodes = nodes
+        self.parents = parents
+        self.edges: dict[str, list[_Edge]] = {}
+        for leaf in (n for n in nodes.values() if not n.children or n.kind == "final"):
+            self.edges[leaf.id] = self._leaf_edges(leaf)
+
+    def _ancestors(self, node_id: str) -> list[str]:
+        chain = [node_id]
+        while chain[-1] in self.parents:
+            chain.append(self.parents[chain[-1]])
+        return chain
+
+    def entry_leaves(self, node_id: str) -> list[str]:
+        node = self.nodes.get(node_id)
+        if node is None:
+            return []
+        if node.kind == "history" or node.kind == "parallel" or node.children:
+            if node.kind == "parallel":
+                return [leaf for child in node.children for leaf in self.entry_leaves(child.id)]
+            targets = (
+                node.initial.targets if node.initial else tuple(ch.id for ch in node.children[:1])
+            )
+            return [leaf for t in targets for leaf in self.entry_leaves(t)]
+        return [node_id]
+
+    def _entry_assigns(self, node_id: str) -> set[str]:
+        assigned: set[str] = set()
+        node = self.nodes.get(node_id)
+        if node is None:
+            return assigned
+        assigned |= _assigned(node.onentry)
+        if node.initial is not None:
+            assigned |= _assigned(node.initial.actions)
+            for target in node.initial.targets:
+                assigned |= self._entry_assigns(target)
+        return assigned
+
+    def _leaf_edges(self, leaf: c.Node) -> list[_Edge]:
+        edges = []
+        for owner_id in self._ancestors(leaf.id):
+            for transition in self.nodes[owner_id].transitions:
+                assigns = _assigned(transition.actions)
+                label = " ".join(transition.events) or "(completion)"
+                for target in transition.targets or (leaf.id,):
+                    entered = assigns | self._entry_assigns(target)
+                    for next_leaf in self.entry_leaves(target):
+                        edges.append(_Edge(next_leaf, frozenset(entered), label))
+        return edges
+
+    def path_without(self, start: list[str], goal: str, name: str) -> list[str] | None:
+        """A path from a start leaf to `goal` along which `name` is never assigned."""
+        previous: dict[str, tuple[str, str] | None] = {s: None for s in start}
+        queue = deque(start)
+        while queue:
+            current = queue.popleft()
+            if current == goal:
+                return self._unwind(previous, current)
+            for edge in self.edges.get(current, []):
+                if name in edge.assigns or edge.target in previous:
+                    continue
+                previous[edge.target] = (current, edge.label)
+                queue.append(edge.target)
+        return None
+
+    def _unwind(self, previous: dict[str, tuple[str, str] | None], current: str) -> list[str]:
+        path = [self.nodes[current].name or current]
+        step = previous[current]
+        while step is not None:
+            path.append(f"[{step[1]}]")
+            path.append(self.nodes[step[0]].name or step[0])
+            step = previous[step[0]]
+        return list(reversed(path))
