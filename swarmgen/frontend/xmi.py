@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import codecs
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from lxml import etree
@@ -56,6 +56,7 @@ class _Context:
     index: dict[str, RawElement]
     line_cursor: dict[int, int]
     count: int = 0
+    stereotype_ids: dict[str, Span] = field(default_factory=dict)
 
 
 class InputError(Exception):
@@ -391,5 +392,20 @@ def _stereotype(node: etree._Element, ctx: _Context) -> StereotypeApplication:
     span = Span(
         file=ctx.file, line=line, col=_column(node, line, ctx), xmi_id=xmi_id, path=qname.localname
     )
+    if xmi_id:
+        first = ctx.stereotype_ids.get(xmi_id) or (
+            ctx.index[xmi_id].span if xmi_id in ctx.index else None
+        )
+        if first is not None:
+            ctx.diagnostics.append(
+                dg.diag(
+                    dg.DUPLICATE_ID,
+                    f"xmi:id '{xmi_id}' is used twice",
+                    span,
+                    notes=[f"first used at {first.location()}"],
+                    hint="ids must be unique; re-export the model or rename one id",
+                )
+            )
+        ctx.stereotype_ids.setdefault(xmi_id, span)
     name = qname.localname.rsplit(".", 1)[-1]
     return StereotypeApplication(name, qname.namespace or "", tuple(bases), tags, span)

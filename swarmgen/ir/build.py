@@ -129,10 +129,10 @@ class _Builder:
             target = self.raw.resolve(value)
             if target is not None:
                 return target.name or None
-            if (
-                "#" in value
-            ):  # pathmap://.../UMLPrimitiveTypes.library.uml#Real, OMG uml.xml#Integer
+            # pathmap://.../UMLPrimitiveTypes.library.uml#Real, OMG uml.xml#Integer
+            if "#" in value:
                 return value.rsplit("#", 1)[1] or None
+            self._resolve(element, "type", value, None)  # reports the dangling reference
         return None
 
     def prop(self, element: RawElement) -> Property:
@@ -751,9 +751,10 @@ def _source_behaviour(b: _Builder, source: RawElement) -> Behaviour | None:
 
 def _guard(b: _Builder, element: RawElement) -> tuple[expr.Expr | None, str | None]:
     values = element.ref_values("guard")
-    constraint = (
-        b.raw.resolve(values[0]) if values else element.first("guard") or element.first("ownedRule")
-    )
+    if values:
+        constraint = b.ref(element, "guard", {"Constraint"})
+    else:
+        constraint = element.first("guard") or element.first("ownedRule")
     if constraint is None:
         return None, None
     text = _constraint_text(constraint)
