@@ -134,6 +134,9 @@ EVENT_ARGUMENT = _code(
     "SG120", "event-argument", "raise/send gives a field the event does not have"
 )
 MACHINE_TOO_DEEP = _code("SG121", "nesting-too-deep", "states nested deeper than the limit")
+BAD_DEFAULT = _code(
+    "SG122", "bad-default-value", "a default value generated code cannot represent exactly"
+)
 # --- analysis: swarm bugs before flight
 UNREACHABLE_STATE = _code(
     "SG201",

@@ -6,6 +6,7 @@ reported here, with the element's span; semantic rules live in `swarmgen.check`.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Literal, TypeVar
@@ -60,6 +61,7 @@ KNOWN_STEREOTYPES: dict[str, frozenset[str]] = {
     "SwarmEvent": frozenset({"sender", "scope"}),
     **{k: _BEHAVIOUR_TAGS for k in _BEHAVIOURS},
 }
+MAX_SAFE_INTEGER = 2**53 - 1
 # Languages whose bodies are swarmgen's expression language; anything else is kept opaque.
 OWN_LANGUAGES = frozenset({"", "swarmgen", "sg"})
 _EVENT_TYPES = {"SignalEvent", "TimeEvent", "CallEvent", "ChangeEvent", "AnyReceiveEvent", "Signal"}
@@ -141,9 +143,24 @@ class _Builder:
             name=element.name,
             ident=identifier(element.name),
             type=self.type_name(element),
-            default=_default_value(element),
+            default=self._representable(element, _default_value(element)),
             span=element.span,
         )
+
+    def _representable(self, element: RawElement, value: Value) -> Value:
+        """Numbers every target holds exactly: ECMAScript has no integers beyond 2**53."""
+        bad = (
+            isinstance(value, int) and not isinstance(value, bool) and abs(value) > MAX_SAFE_INTEGER
+        ) or (isinstance(value, float) and not math.isfinite(value))
+        if not bad:
+            return value
+        self.report(
+            dg.BAD_DEFAULT,
+            f"default value {value!r} of '{element.name}' cannot be represented exactly in the generated code",
+            element.span,
+            hint=f"use a number between -{MAX_SAFE_INTEGER} and {MAX_SAFE_INTEGER}",
+        )
+        return None
 
     # --- stereotypes
 
