@@ -119,16 +119,39 @@ def _check_codes(codes: tuple[str, ...]) -> None:
     "-o", "--output", type=click.Path(path_type=Path), required=True, help="Output directory."
 )
 @click.option("--check", is_flag=True, help="Write nothing; exit 1 with a diff if OUTPUT is stale.")
+@click.option(
+    "--backend",
+    "backends",
+    multiple=True,
+    metavar="NAME",
+    help="Only these backends besides SCXML (repeatable; `scxml` alone: SCXML only). Default: all.",
+)
 @FORMAT
 @STRICT
 @DISABLE
 @_guarded
 def compile_(
-    model: Path, output: Path, check: bool, fmt: str, strict: bool, disabled: tuple[str, ...]
+    model: Path,
+    output: Path,
+    check: bool,
+    backends: tuple[str, ...],
+    fmt: str,
+    strict: bool,
+    disabled: tuple[str, ...],
 ) -> None:
-    """Compile MODEL into OUTPUT (SCXML per member type), replacing it atomically."""
+    """Compile MODEL into OUTPUT (SCXML and every backend), replacing it atomically."""
     _check_codes(disabled)
-    result = pipeline.compile_model(model)
+    from swarmgen.backends import names as backend_names
+
+    known = ["scxml", *backend_names()]
+    unknown = [b for b in backends if b not in known]
+    if unknown:
+        raise click.BadParameter(
+            f"unknown backend(s) {', '.join(unknown)}; choose from {', '.join(known)}",
+            param_hint="--backend",
+        )
+    selected = [b for b in backends if b != "scxml"] if backends else None
+    result = pipeline.compile_model(model, backends=selected)
     diagnostics = dg.apply_options(result.validation.diagnostics, strict=strict, disabled=disabled)
     _emit_diagnostics(diagnostics, fmt, to_stdout=False)
     if dg.has_errors(diagnostics) and result.files:
@@ -207,3 +230,41 @@ def replay(model: Path, member: str, scenario: Path, backend: str) -> None:
         sys.exit(dg.ExitCode.INPUT_ERROR)
     for record in trace:
         click.echo(json.dumps(record, sort_keys=True))
+
+
+@main.command(name="graph")
+@MODEL
+@click.option("--member", help="Only this member type: its machine, submachines and hardware.")
+@click.option(
+    "--format", "diagram_format", type=click.Choice(["mermaid", "dot", "svg"]), default="mermaid",
+    show_default=True, help="Mermaid text, Graphviz DOT, or SVG (laid out by Graphviz `dot`).",
+)  # fmt: skip
+@click.option(
+    "-o", "--output", type=click.Path(path_type=Path),
+    help="Write one file per diagram into this directory (replaced atomically); else stdout.",
+)  # fmt: skip
+@_guarded
+def graph_(model: Path, member: str | None, diagram_format: str, output: Path | None) -> None:
+    """Draw MODEL's state machines (one diagram each) and its swarm composition."""
+    from swarmgen.graph import GraphError
+
+    if diagram_format == "svg" and output is None:
+        raise click.UsageError("--format svg writes files: give -o DIR")
+    try:
+        result = pipeline.graph_model(model, diagram_format, member)
+    except GraphError as err:
+        click.echo(f"swarmgen: error: {err}", err=True)
+        sys.exit(dg.ExitCode.INPUT_ERROR)
+    diagnostics = result.validation.diagnostics
+    if not result.files:
+        _emit_diagnostics(diagnostics, "text", to_stdout=False)
+        click.echo(f"swarmgen: {model}: {dg.summary_line(diagnostics)}; nothing drawn", err=True)
+        sys.exit(result.validation.exit_code or dg.ExitCode.MODEL_ERRORS)
+    diagrams = {p: t for p, t in result.files.items() if p.name != pipeline.MANIFEST}
+    if output is None:
+        click.echo("\n".join(diagrams.values()), nl=False)
+        return
+    pipeline.write_tree(result.files, output)
+    click.echo(
+        f"swarmgen: {model} -> {output}: {len(diagrams)} {diagram_format} diagram(s)", err=True
+    )

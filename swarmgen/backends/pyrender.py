@@ -6,6 +6,7 @@ Every string that comes from the model is printed with `repr()`, so it stays a s
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import black
@@ -19,8 +20,10 @@ from swarmgen.names import identifier
 BLACK_MODE = black.Mode(line_length=100, target_versions={TargetVersion.PY311})
 
 
+@functools.lru_cache(maxsize=1024)
 def format_python(source: str) -> str:
-    """black, pinned (its output is in golden files and generated/)."""
+    """black, pinned (its output is in golden files and generated/). Memoised: black is the
+    slowest step of compiling, and the same sources recur (the check after a write, tests)."""
     return black.format_str(source, mode=BLACK_MODE)
 
 
