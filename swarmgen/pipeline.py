@@ -17,7 +17,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
-from swarmgen import __version__, check
+from swarmgen import __version__, check, graph
 from swarmgen import diagnostics as dg
 from swarmgen.backends import registry
 from swarmgen.chart.lower import lower
@@ -97,9 +97,24 @@ def _compile(path: Path, backends: Sequence[str] | None) -> Compilation:
         if backends is None or name in backends:
             for relative, text in backend.render(validation.model, charts).items():
                 files[PurePosixPath(name) / relative] = text
+    for relative, text in graph.files(validation.model, "mermaid").items():
+        files[PurePosixPath("diagrams") / relative] = text
     files[PurePosixPath("README.md")] = _output_readme(validation.model, path, documents)
     files[PurePosixPath(MANIFEST)] = _manifest(path, files)
     return Compilation(validation, files)
+
+
+def graph_model(path: Path, fmt: str = "mermaid", member: str | None = None) -> Compilation:
+    """Validate, then draw every machine and the swarm composition (`swarmgen.graph`) in `fmt`,
+    with a manifest so that the next run may replace the directory. Raises graph.GraphError for
+    an unknown member type or a missing Graphviz."""
+    with _few_collections():
+        validation = _validate(path)
+        if validation.model is None or dg.has_errors(validation.diagnostics):
+            return Compilation(validation, {})
+        files = graph.files(validation.model, fmt, member)
+        files[PurePosixPath(MANIFEST)] = _manifest(path, files)
+        return Compilation(validation, files)
 
 
 def _md(text: str) -> str:
