@@ -87,3 +87,8 @@ def one_line(text: str) -> str:
     """Model text inside a generated comment or docstring line: no line breaks, no controls."""
     flat = " ".join(text.splitlines())
     return "".join(ch if ch.isprintable() else " " for ch in flat)
+
+
+def doc_text(text: str) -> str:
+    """Model text inside a generated docstring: one line, no quote or backslash to end it early."""
+    return one_line(text).replace("\\", "/").replace('"', "'")

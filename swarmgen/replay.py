@@ -1,7 +1,7 @@
 """`swarmgen replay`: run one member of a compiled model against a scenario on one backend and
 return its trace (one record per step: input, active states, member data).
 
-Backends: `asyncio` runs the generated asyncio package (its vendored runtime, behaviours as
+Backends: `asyncio` and `smach` run the generated Python packages (their vendored runtime, behaviours as
 tasks); `scxml` runs the emitted SCXML in Qt SCXML (system python3 + PySide2), the independent
 reference. Each backend compiles into a temporary directory and imports or loads from there.
 """
@@ -29,7 +29,7 @@ from swarmgen.chart.lower import lower
 
 SYSTEM_PYTHON = "/usr/bin/python3"
 QT_SCRIPT = Path(__file__).resolve().parent / "scxml" / "qt_script.py"
-BACKENDS = ("asyncio", "scxml")
+BACKENDS = ("asyncio", "smach", "scxml")
 _unique = itertools.count()
 
 

@@ -11,7 +11,7 @@ from swarmgen.backends.pyrender import ChartRenderer, format_python
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart.model import Chart
 from swarmgen.ir.nodes import Model
-from swarmgen.names import IdAllocator, one_line, ros_name
+from swarmgen.names import IdAllocator, doc_text, one_line, ros_name
 from swarmgen.render import render
 
 RUNTIME_MODULES = ("chart", "engine", "member", "simulated", "cli", "replay")
@@ -79,9 +79,9 @@ class AsyncioBackend:
             render(
                 "asyncio/package_init.py.j2",
                 **common,
-                model=model.name,
+                model=doc_text(model.name),
                 package=str(package),
-                first_member=next(iter(members), ""),
+                first_member=doc_text(next(iter(members), "")),
                 modules=sorted(modules.values()),
                 member_modules="{" + ", ".join(f"{k!r}: {v}" for k, v in members.items()) + "}",
                 composition=repr(composition),
@@ -109,10 +109,8 @@ def render_member(chart: Chart, common: dict[str, str]) -> str:
     text = render(
         "asyncio/member.py.j2",
         **common,
-        what=one_line(what),
-        doc=one_line(f"Behaviour of {what} (state machine {chart.machine}).")
-        .replace('"', "'")
-        .replace("\\", "/"),
+        what=doc_text(what),
+        doc=doc_text(f"Behaviour of {what} (state machine {chart.machine})."),
         chart_name=repr(chart.name),
         member_type=repr(chart.member),
         machine=repr(chart.machine),

@@ -88,7 +88,8 @@ class ChartRenderer:
             parts.append(self.py(transition.cond))
         if not parts:
             return None
-        return self._function("cond", [f"return bool({' and '.join(parts)})"])
+        joined = " and ".join(parts) if len(parts) > 1 else _unwrap(parts[0])
+        return self._function("cond", [f"return bool({joined})"])
 
     def _action(self, actions: tuple[c.Action, ...]) -> str | None:
         lines = [line for action in actions for line in self._action_lines(action)]
@@ -156,3 +157,16 @@ class ChartRenderer:
             f"b.transition({source!r}, {tuple(transition.events)!r}, {tuple(transition.targets)!r}"
         )
         self.code.statements.append(head + "".join(f", {o}" for o in options) + ")")
+
+
+def _unwrap(text: str) -> str:
+    """`(a < b)` -> `a < b` when the outer parentheses enclose everything (ruff UP034)."""
+    if not (text.startswith("(") and text.endswith(")")):
+        return text
+    depth = 0
+    for index, char in enumerate(text):
+        depth += char == "("
+        depth -= char == ")"
+        if depth == 0 and index < len(text) - 1:
+            return text  # `(a) and (b)`: the first parenthesis closes early
+    return text[1:-1]
