@@ -7,7 +7,12 @@ Every string that comes from the model is printed with `repr()`, so it stays a s
 from __future__ import annotations
 
 import functools
+import hashlib
+import importlib.metadata
+import os
+import tempfile
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import black
 from black.mode import TargetVersion
@@ -17,14 +22,46 @@ from swarmgen.ir import expr
 from swarmgen.ir.nodes import Value
 from swarmgen.names import identifier
 
+BLACK_VERSION = importlib.metadata.version("black")
 BLACK_MODE = black.Mode(line_length=100, target_versions={TargetVersion.PY311})
 
 
 @functools.lru_cache(maxsize=1024)
 def format_python(source: str) -> str:
-    """black, pinned (its output is in golden files and generated/). Memoised: black is the
-    slowest step of compiling, and the same sources recur (the check after a write, tests)."""
-    return black.format_str(source, mode=BLACK_MODE)
+    """black, pinned (its output is in golden files and generated/). Memoised in process and on
+    disk: black is the slowest step of compiling, and the same sources recur (`--check` after a
+    write, CI, tests). The cache key is the source and black's version, so a hit is exactly what
+    black would print."""
+    key = hashlib.sha256(f"{BLACK_VERSION}\0{BLACK_MODE!r}\0{source}".encode()).hexdigest()
+    cached = _cache_path(key)
+    if cached is not None:
+        try:
+            return cached.read_text(encoding="utf-8")
+        except OSError:
+            pass
+    formatted = black.format_str(source, mode=BLACK_MODE)
+    if cached is not None:
+        _store(cached, formatted)
+    return formatted
+
+
+def _cache_path(key: str) -> Path | None:
+    if os.environ.get("SWARMGEN_NO_CACHE"):
+        return None
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "swarmgen" / "black" / key[:2] / key
+
+
+def _store(path: Path, text: str) -> None:
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(
+            "w", encoding="utf-8", dir=path.parent, delete=False
+        ) as handle:
+            handle.write(text)
+        os.replace(handle.name, path)
+    except OSError:
+        pass  # a read-only home: no cache, same output
 
 
 @dataclass(frozen=True)
