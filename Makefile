@@ -8,7 +8,7 @@ ROS_STAMP := $(VENV)/.ros-installed
 SAMPLES := $(sort $(wildcard sample_models/*/*.xmi))
 SYSTEM_PYTHON := /usr/bin/python3
 
-.PHONY: demo test lint typecheck pytest generated check-generated golden schema sysdeps ros bench clean
+.PHONY: demo test lint typecheck pytest generated check-generated golden schema sysdeps ros bench bench-ros clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -73,6 +73,10 @@ schema: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_compile.py
+
+## bench-ros: the generated rclpy swarm, 8 UAVs + 8 UGVs in one process (docs/ros2.md)
+bench-ros: $(STAMP) $(ROS_STAMP) sysdeps
+	$(BIN)/python benchmarks/bench_rclpy.py
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build dist

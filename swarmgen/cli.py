@@ -217,19 +217,53 @@ def schema(output: Path, check: bool) -> None:
     "--backend", type=click.Choice(["asyncio", "smach", "scxml", "rclpy"]), default="asyncio", show_default=True,
     help="Where to run: the generated asyncio, smach or rclpy code, or the SCXML in Qt SCXML.",
 )  # fmt: skip
+@click.option(
+    "--record", type=click.Path(path_type=Path),
+    help="Also write the trace as a ROS 2 bag into this new directory (docs/trace.md).",
+)  # fmt: skip
+@click.option(
+    "--storage", type=click.Choice(["mcap", "sqlite3"]), default="mcap", show_default=True,
+    help="Bag storage for --record.",
+)  # fmt: skip
 @_guarded
-def replay(model: Path, member: str, scenario: Path, backend: str) -> None:
+def replay(
+    model: Path, member: str, scenario: Path, backend: str, record: Path | None, storage: str
+) -> None:
     """Run one member of MODEL against a scenario; print its trace as JSON lines."""
     from swarmgen import replay as replaying
 
+    if record is not None and record.exists():
+        click.echo(f"swarmgen: error: {record} exists; --record writes a new bag", err=True)
+        sys.exit(dg.ExitCode.INPUT_ERROR)
     try:
         _, steps = replaying.load_scenario(scenario)
         trace = replaying.replay(model, member, steps, backend)
     except replaying.ReplayError as err:
         click.echo(f"swarmgen: error: {err}", err=True)
         sys.exit(dg.ExitCode.INPUT_ERROR)
-    for record in trace:
-        click.echo(json.dumps(record, sort_keys=True))
+    for line in trace:
+        click.echo(json.dumps(line, sort_keys=True))
+    if record is not None:
+        _record_replay(record, member, steps, trace, storage)
+
+
+def _record_replay(
+    path: Path, member: str, steps: list[dict[str, object]], trace: list[dict[str, object]],
+    storage: str,
+) -> None:  # fmt: skip
+    try:
+        from swarmgen.trace.bag import TraceError, record_replay
+    except ModuleNotFoundError as err:
+        click.echo(
+            f"swarmgen: error: --record needs {err.name}: pip install 'swarmgen[trace]'", err=True
+        )
+        sys.exit(dg.ExitCode.INPUT_ERROR)
+    try:
+        record_replay(path, member, steps, trace, storage=storage)
+    except TraceError as err:
+        click.echo(f"swarmgen: error: {err}", err=True)
+        sys.exit(dg.ExitCode.INPUT_ERROR)
+    click.echo(f"swarmgen: recorded {len(steps)} step(s) into {path} ({storage})", err=True)
 
 
 @main.command(name="graph")
@@ -267,4 +301,148 @@ def graph_(model: Path, member: str | None, diagram_format: str, output: Path | 
     pipeline.write_tree(result.files, output)
     click.echo(
         f"swarmgen: {model} -> {output}: {len(diagrams)} {diagram_format} diagram(s)", err=True
+    )
+
+
+@main.command()
+@click.argument("bags", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.option(
+    "--events", help="Comma-separated event names, shown in this order (default: all of them, "
+    "in mission order).",
+)  # fmt: skip
+@click.option(
+    "--plot", "plot_path", type=click.Path(path_type=Path),
+    help="Write a horizontal box plot (.png or .svg).",
+)  # fmt: skip
+@click.option(
+    "--csv", "csv_path", type=click.Path(path_type=Path), help="Write the statistics as CSV."
+)
+@click.option(
+    "--alias", "aliases", multiple=True, metavar="OLD=NEW",
+    help="Rename an event while reading (repeatable), e.g. --alias targetDone=targetRescued.",
+)  # fmt: skip
+@_guarded
+def timeline(
+    bags: tuple[Path, ...],
+    events: str | None,
+    plot_path: Path | None,
+    csv_path: Path | None,
+    aliases: tuple[str, ...],
+) -> None:
+    """Each event's time since launch over many runs (one run per bag; a directory holds bags).
+
+    Prints lower whisker, quartiles, median, upper whisker (1.5 IQR) and outliers in seconds,
+    and the number of runs in which the event occurred; see docs/trace.md.
+    """
+    renames: dict[str, str] = {}
+    for alias in aliases:
+        old, sep, new = alias.partition("=")
+        if not sep or not old.strip() or not new.strip():
+            raise click.BadParameter(f"{alias!r} is not OLD=NEW", param_hint="--alias")
+        renames[old.strip()] = new.strip()
+    if plot_path is not None and plot_path.suffix.lower() not in (".png", ".svg"):
+        raise click.BadParameter(f"{plot_path}: use a .png or .svg file", param_hint="--plot")
+    try:
+        from swarmgen.trace import timeline as timelines
+        from swarmgen.trace.bag import TraceError, read_events
+    except ModuleNotFoundError as err:
+        click.echo(
+            f"swarmgen: error: timeline needs {err.name}: pip install 'swarmgen[trace]'", err=True
+        )
+        sys.exit(dg.ExitCode.INPUT_ERROR)
+    try:
+        runs = read_events(bags, renames)
+    except TraceError as err:
+        click.echo(f"swarmgen: error: {err}", err=True)
+        sys.exit(dg.ExitCode.INPUT_ERROR)
+    chosen = [e.strip() for e in events.split(",") if e.strip()] if events else None
+    result = timelines.build(runs, chosen)
+    click.echo(timelines.table(result), nl=False)
+    if csv_path is not None:
+        csv_path.parent.mkdir(parents=True, exist_ok=True)
+        csv_path.write_text(timelines.csv_text(result), encoding="utf-8")
+    if plot_path is not None:
+        timelines.plot(result, plot_path)
+    click.echo(f"swarmgen: {len(runs)} run(s), {len(result.events)} event(s)", err=True)
+
+
+@main.command()
+@MODEL
+@click.option(
+    "--scenario", default="coverage", show_default=True, metavar="coverage|sar|PATH",
+    help="A shipped scenario (the paper's two) or a scenario file (JSON); see docs/simulate.md.",
+)  # fmt: skip
+@click.option(
+    "--members", "members", multiple=True, metavar="TYPE=N[,N...]",
+    help="Member counts to sweep, e.g. UAV=1,2,4,8 (repeatable); overrides the scenario.",
+)  # fmt: skip
+@click.option("--targets", metavar="N[,N...]", help="Target counts to sweep, e.g. 1,2,4,8,16,32.")
+@click.option("--reps", type=click.IntRange(min=1), help="Repetitions per configuration.")
+@click.option("--seed", type=click.IntRange(min=0), help="Random seed (same seed, same numbers).")
+@click.option(
+    "--workers", type=click.IntRange(min=1), default=1, show_default=True,
+    help="Processes to spread configurations over (results do not depend on it).",
+)  # fmt: skip
+@click.option(
+    "-o", "--output", type=click.Path(path_type=Path),
+    help="Write tables (CSV), results.json and figures (PNG, SVG) here, replaced atomically.",
+)  # fmt: skip
+@_guarded
+def simulate(
+    model: Path,
+    scenario: str,
+    members: tuple[str, ...],
+    targets: str | None,
+    reps: int | None,
+    seed: int | None,
+    workers: int,
+    output: Path | None,
+) -> None:
+    """Run MODEL's compiled behaviours in the paper's abstract world and report the statistics."""
+    import time
+
+    from swarmgen.sim import run as sim_run
+    from swarmgen.sim import scenario as sim_scenario
+
+    started = time.perf_counter()
+    try:
+        chosen = sim_scenario.load(scenario)
+        counts: dict[str, list[int]] = {}
+        for item in members:
+            counts.update(sim_scenario.parse_members(item))
+        target_counts = sim_scenario.parse_counts(targets, "--targets") if targets else None
+        chosen = chosen.with_overrides(counts, target_counts, reps, seed)
+        shown = [-1]
+
+        def progress(done: int, total: int) -> None:
+            width = 30
+            filled = width * done // max(1, total)
+            tenth = 10 * done // max(1, total)
+            if sys.stderr.isatty() or tenth != shown[0] or done == total:
+                shown[0] = tenth
+                end = "" if sys.stderr.isatty() and done < total else "\n"
+                sys.stderr.write(
+                    f"\rswarmgen: simulate [{'#' * filled}{'.' * (width - filled)}] "
+                    f"{done}/{total} runs {time.perf_counter() - started:.1f} s{end}"
+                )
+                sys.stderr.flush()
+
+        sim, files = sim_run.simulate_model(model, chosen, output, workers, progress)
+    except (sim_scenario.ScenarioError, sim_run.SimulationError) as err:
+        click.echo(f"swarmgen: error: {err}", err=True)
+        sys.exit(dg.ExitCode.INPUT_ERROR)
+    coverage = files.get("coverage.csv", b"").decode()
+    if output is None:
+        click.echo(coverage, nl=False)
+        for name in ("search.csv", "rescue.csv"):
+            if name in files:
+                click.echo(f"\n# {name}\n{files[name].decode()}", nl=False)
+    errors = sum(len(r.errors) for r in sim.runs)
+    unfinished = sum(1 for r in sim.runs if r.reason in ("max_ticks", "stalled"))
+    where = f" -> {output}" if output is not None else ""
+    click.echo(
+        f"swarmgen: {model}{where}: {len(sim.runs)} runs of {len(sim.configs)} configuration(s) "
+        f"in {time.perf_counter() - started:.1f} s; {unfinished} did not reach the stop "
+        f"condition; {errors} behaviour error(s)",
+        err=True,
     )

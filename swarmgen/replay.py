@@ -2,7 +2,9 @@
 return its trace (one record per step: input, active states, member data).
 
 Backends: `asyncio` and `smach` run the generated Python packages (their vendored runtime, behaviours as
-tasks); `scxml` runs the emitted SCXML in Qt SCXML (system python3 + PySide2), the independent
+tasks); `rclpy` runs one member node of the generated ROS 2 package on real rclpy in a
+subprocess (its interfaces built into the venv first; see swarmgen.ros.harness);
+`scxml` runs the emitted SCXML in Qt SCXML (system python3 + PySide2), the independent
 reference. Each backend compiles into a temporary directory and imports or loads from there.
 """
 
@@ -26,10 +28,11 @@ from swarmgen import diagnostics as dg
 from swarmgen import pipeline
 from swarmgen.backends.asyncio_backend import member_modules, package_name
 from swarmgen.chart.lower import lower
+from swarmgen.ir.nodes import Model
 
 SYSTEM_PYTHON = "/usr/bin/python3"
 QT_SCRIPT = Path(__file__).resolve().parent / "scxml" / "qt_script.py"
-BACKENDS = ("asyncio", "smach", "scxml")
+BACKENDS = ("asyncio", "smach", "scxml", "rclpy")
 _unique = itertools.count()
 
 
@@ -98,6 +101,8 @@ def replay_many(
         chart = charts[member]
         if backend == "scxml":
             traces = run_qt_many(out / "scxml" / f"{chart.name}.scxml", scenarios)
+        elif backend == "rclpy":
+            traces = _run_rclpy(out / "rclpy", validation.model, chart.name, scenarios)
         else:
             package = out / backend / package_name(validation.model)
             module_name = member_modules(tuple(charts.values()))[chart.name]
@@ -145,6 +150,18 @@ def _run_python(
     finally:
         for key in [k for k in sys.modules if k == name or k.startswith(f"{name}.")]:
             del sys.modules[key]
+
+
+def _run_rclpy(
+    rclpy_dir: Path, model: Model, chart_name: str, scenarios: Sequence[Sequence[dict[str, Any]]]
+) -> list[list[dict[str, Any]]]:
+    """One member node on real rclpy, in a subprocess (see swarmgen.ros.harness)."""
+    from swarmgen.ros import harness
+
+    try:
+        return harness.replay_rclpy(rclpy_dir, model, lower(model), chart_name, scenarios)
+    except (harness.RosUnavailable, harness.RosRunError) as err:
+        raise ReplayError(str(err)) from None
 
 
 def run_qt_many(

@@ -26,11 +26,12 @@ class Backend(Protocol):
 def registry() -> dict[str, Backend]:
     """All built-in backends by name, in output order (imported lazily: start-up stays fast)."""
     from swarmgen.backends.asyncio_backend import AsyncioBackend
+    from swarmgen.backends.rclpy_backend import RclpyBackend
     from swarmgen.backends.smach_backend import SmachBackend
 
-    backends: list[Backend] = [AsyncioBackend(), SmachBackend()]
+    backends: list[Backend] = [AsyncioBackend(), SmachBackend(), RclpyBackend()]
     return {b.name: b for b in backends}
 
 
 def names() -> list[str]:
-    return ["asyncio", "smach"]
+    return ["asyncio", "smach", "rclpy"]

@@ -7,7 +7,7 @@ from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, State, TriggerKind
-from swarmgen.ir.query import ModelIndex, walk
+from swarmgen.ir.query import ModelIndex, outgoing, walk
 
 # `preempted` ends a behaviour only because its state is being left: nobody waits for it.
 _UNWAITED = {"preempted"}
@@ -67,14 +67,12 @@ def check_unhandled_outcomes(model: Model) -> list[Diagnostic]:
     index = ModelIndex(model)
     found: list[Diagnostic] = []
     for machine in model.machines:
-        leaving: dict[str, list[object]] = {}
-        for transition in machine.transitions:
-            leaving.setdefault(transition.source, []).append(transition)
+        leaving = outgoing(machine)  # once per machine, not a scan per state
         for placed in walk(machine):
             state = placed.vertex
             if not isinstance(state, State) or state.activity is None:
                 continue
-            transitions = [t for t in machine.transitions if t.source == state.id]
+            transitions = leaving.get(state.id, [])
             if any(not t.triggers for t in transitions):
                 continue  # a completion transition handles every outcome
             handled = {

@@ -12,12 +12,20 @@ from collections import deque
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir.nodes import FinalState, Machine, Model, PseudoKind, Pseudostate, Region, State
+from swarmgen.ir.nodes import (
+    FinalState,
+    Machine,
+    Model,
+    PseudoKind,
+    Pseudostate,
+    Region,
+    State,
+    Transition,
+)
 from swarmgen.ir.query import ModelIndex, Placed, connection_owner, initial_of, outgoing, walk
 
 
-def _initial_targets(machine: Machine, region: Region) -> list[str]:
-    leaving = outgoing(machine)
+def _initial_targets(leaving: dict[str, list[Transition]], region: Region) -> list[str]:
     return [t.target for p in initial_of(region) for t in leaving.get(p.id, [])]
 
 
@@ -26,7 +34,7 @@ def reachable(machine: Machine) -> set[str]:
     placed = {p.vertex.id: p for p in walk(machine)}
     leaving = outgoing(machine)
     owners = connection_owner(machine)
-    start = [t for region in machine.regions for t in _initial_targets(machine, region)]
+    start = [t for region in machine.regions for t in _initial_targets(leaving, region)]
     start += [p.id for p in machine.connection_points if p.kind == PseudoKind.ENTRY_POINT]
     seen: set[str] = set()
     queue = deque(start)
@@ -53,7 +61,7 @@ def _successors(
         found.append(where.parent.id)
     if isinstance(vertex, State):
         for region in vertex.regions:
-            found += _initial_targets(machine, region)
+            found += _initial_targets(leaving, region)
         for conn in vertex.connections:
             found += [t.target for t in leaving.get(conn.id, [])]
     if (
@@ -65,7 +73,7 @@ def _successors(
         }
         and where.region is not None
     ):
-        found += _initial_targets(machine, where.region)
+        found += _initial_targets(leaving, where.region)
     return found
 
 

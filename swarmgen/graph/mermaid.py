@@ -84,14 +84,17 @@ class _StateWriter:
     def _starts(self) -> set[str]:
         """Initial pseudostates drawn as `[*]`: in a region, with every transition out of them
         going to a vertex of the same region and none coming in."""
+        leaving: dict[str, list[Edge]] = {}  # indexed once: a scan per vertex is quadratic
+        for e in self.d.edges:
+            leaving.setdefault(e.source, []).append(e)
+        entered = {e.target for e in self.d.edges}
         starts = set()
         for v in self.vertex.values():
             if v.shape != Shape.INITIAL or v.id not in self.d.region_of:
                 continue
             region = self.d.region_of[v.id]
-            out = [e for e in self.d.edges if e.source == v.id]
-            into = [e for e in self.d.edges if e.target == v.id]
-            if not into and all(self.d.region_of.get(e.target) == region for e in out):
+            out = leaving.get(v.id, [])
+            if v.id not in entered and all(self.d.region_of.get(e.target) == region for e in out):
                 starts.add(v.id)
         return starts
 

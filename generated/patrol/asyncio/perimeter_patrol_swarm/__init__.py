@@ -15,3 +15,10 @@ from . import relay, scout
 MEMBER_TYPES: dict[str, ModuleType] = {"Scout": scout, "Relay": relay}
 # member type -> number of members in the swarm composition
 COMPOSITION: dict[str, int] = {"Scout": 3, "Relay": 1}
+
+__all__ = [
+    "COMPOSITION",
+    "MEMBER_TYPES",
+    "relay",
+    "scout",
+]

@@ -30,7 +30,7 @@ def _args_2(ctx: Context) -> dict[str, Any]:
 
 
 def _cond_3(ctx: Context) -> bool:
-    return bool((ctx.event_data.get("level") >= 3))
+    return bool(ctx.event_data.get("level") >= 3)
 
 
 def _action_4(ctx: Context) -> None:
@@ -68,10 +68,12 @@ def build() -> Chart:
     b.transition("Relaying", ("alarm",), ("Relaying",), cond=_cond_3, action=_action_4)
     b.transition("Relaying", ("missionAbort", "recall"), ("Landing",))
     b.transition("Relaying", ("outcome.Relaying.aborted",), ("Landing",))
+    b.transition("Relaying", ("outcome.Relaying.succeeded",), ("Relaying",))
     b.node(
         "Landing", "state", None, name="Landing", call=Call("Land", "HardwareFunction", _args_5, ())
     )
     b.transition("Landing", ("outcome.Landing.succeeded",), ("Landed",))
+    b.transition("Landing", ("outcome.Landing.aborted",), ("Landing",))
     b.node("Landed", "final", None, name="Landed")
     b.initial(None, ("Grounded",))
     return b.build()

@@ -55,7 +55,7 @@ def _action_6(ctx: Context) -> None:
 
 def _cond_7(ctx: Context) -> bool:
     d = ctx.data
-    return bool((d["retries"] < d["max_retries"]))
+    return bool(d["retries"] < d["max_retries"])
 
 
 def _action_8(ctx: Context) -> None:
@@ -76,7 +76,7 @@ def _action_10(ctx: Context) -> None:
 
 def _cond_11(ctx: Context) -> bool:
     d = ctx.data
-    return bool(((ctx.event_data.get("zone") == d["zone_id"]) and (not d["alarm_raised"])))
+    return bool((ctx.event_data.get("zone") == d["zone_id"]) and (not d["alarm_raised"]))
 
 
 def _action_12(ctx: Context) -> None:
@@ -92,82 +92,90 @@ def _action_13(ctx: Context) -> None:
     d["intruders"] = 0
 
 
-def _cond_14(ctx: Context) -> bool:
+def _action_14(ctx: Context) -> None:
+    ctx.write_back("intruder_pose", "intruder_pose")
+
+
+def _cond_15(ctx: Context) -> bool:
     d = ctx.data
-    return bool((d["intruders"] >= d["max_intruders"]))
+    return bool(d["intruders"] >= d["max_intruders"])
 
 
-def _action_15(ctx: Context) -> None:
+def _action_16(ctx: Context) -> None:
     d = ctx.data
     ctx.send("alarm", {"zone": d["zone_id"], "level": 3})
     d["alarm_raised"] = True
 
 
-def _action_16(ctx: Context) -> None:
+def _action_17(ctx: Context) -> None:
     d = ctx.data
     ctx.send("alarm", {"zone": d["zone_id"], "level": 1})
 
 
-def _args_17(ctx: Context) -> dict[str, Any]:
+def _args_18(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"target_pose": d["intruder_pose"]}
 
 
-def _action_18(ctx: Context) -> None:
+def _action_19(ctx: Context) -> None:
     d = ctx.data
     d["alarm_raised"] = False
 
 
-def _action_19(ctx: Context) -> None:
+def _action_20(ctx: Context) -> None:
     d = ctx.data
     d["goal_pose"] = d["dock_pose"]
 
 
-def _args_20(ctx: Context) -> dict[str, Any]:
+def _args_21(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"target_pose": d["goal_pose"]}
 
 
-def _action_21(ctx: Context) -> None:
+def _action_22(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _action_22(ctx: Context) -> None:
+def _action_23(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = d["retries"] + 1
 
 
-def _cond_23(ctx: Context) -> bool:
+def _cond_24(ctx: Context) -> bool:
     d = ctx.data
-    return bool((d["retries"] < d["max_retries"]))
+    return bool(d["retries"] < d["max_retries"])
 
 
-def _action_24(ctx: Context) -> None:
+def _action_25(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _args_25(ctx: Context) -> dict[str, Any]:
+def _args_26(ctx: Context) -> dict[str, Any]:
     return {}
 
 
-def _action_26(ctx: Context) -> None:
+def _action_27(ctx: Context) -> None:
     d = ctx.data
     ctx.write_back("battery", "battery")
-    d["low_battery"] = False
+    d["low_battery"] = d["battery"] < 20
 
 
-def _args_27(ctx: Context) -> dict[str, Any]:
+def _action_28(ctx: Context) -> None:
+    ctx.write_back("battery", "battery")
+
+
+def _args_29(ctx: Context) -> dict[str, Any]:
     return {}
 
 
-def _cond_28(ctx: Context) -> bool:
+def _cond_30(ctx: Context) -> bool:
     d = ctx.data
-    return bool(((ctx.event_data.get("battery") < 20) and (not d["low_battery"])))
+    return bool((ctx.event_data.get("battery") < 20) and (not d["low_battery"]))
 
 
-def _action_29(ctx: Context) -> None:
+def _action_31(ctx: Context) -> None:
     d = ctx.data
     d["battery"] = ctx.event_data.get("battery")
     d["low_battery"] = True
@@ -253,9 +261,10 @@ def build() -> Chart:
     b.transition("Sweeping", ("outcome.Sweeping.intruderSeen",), ("Assess",), action=_action_10)
     b.transition("Sweeping", ("intrusion",), ("Investigate",), cond=_cond_11, action=_action_12)
     b.transition("Sweeping", ("outcome.Sweeping.succeeded",), ("GetZone",), action=_action_13)
+    b.transition("Sweeping", ("outcome.Sweeping.aborted",), ("GetZone",), action=_action_14)
     b.node("Assess", "state", "Patrol", name="Assess")
-    b.transition("Assess", (), ("Investigate",), cond=_cond_14, action=_action_15)
-    b.transition("Assess", (), ("Sweeping",), action=_action_16)
+    b.transition("Assess", (), ("Investigate",), cond=_cond_15, action=_action_16)
+    b.transition("Assess", (), ("Sweeping",), action=_action_17)
     b.node("Investigate", "state", "Patrol", name="Investigate")
     b.initial("Investigate", ("Approach",))
     b.node(
@@ -263,15 +272,15 @@ def build() -> Chart:
         "state",
         "Investigate",
         name="Approach",
-        call=Call("MoveTo", "HardwareFunction", _args_17, ()),
+        call=Call("MoveTo", "HardwareFunction", _args_18, ()),
     )
     b.transition(
-        "Approach", ("outcome.Approach.succeeded",), ("InvestigationDone",), action=_action_18
+        "Approach", ("outcome.Approach.succeeded",), ("InvestigationDone",), action=_action_19
     )
     b.transition("Approach", ("outcome.Approach.aborted",), ("InvestigationDone",))
     b.node("InvestigationDone", "final", "Investigate", name="InvestigationDone")
     b.transition("Investigate", ("done.state.Investigate",), ("Sweeping",))
-    b.transition("Patrol", ("lowBattery",), ("GoToDock",), action=_action_19)
+    b.transition("Patrol", ("lowBattery",), ("GoToDock",), action=_action_20)
     b.node("GoToDock", "state", "Main", name="GoToDock")
     b.initial("GoToDock", ("GoToDock__Moving",))
     b.node(
@@ -279,23 +288,23 @@ def build() -> Chart:
         "state",
         "GoToDock",
         name="Moving",
-        call=Call("MoveTo", "HardwareFunction", _args_20, ()),
+        call=Call("MoveTo", "HardwareFunction", _args_21, ()),
     )
     b.transition(
         "GoToDock__Moving",
         ("outcome.GoToDock__Moving.succeeded",),
         ("GoToDock__Done",),
-        action=_action_21,
+        action=_action_22,
     )
     b.transition(
         "GoToDock__Moving",
         ("outcome.GoToDock__Moving.aborted",),
         ("GoToDock__Retry",),
-        action=_action_22,
+        action=_action_23,
     )
     b.node("GoToDock__Retry", "state", "GoToDock", name="Retry")
-    b.transition("GoToDock__Retry", (), ("GoToDock__Moving",), cond=_cond_23)
-    b.transition("GoToDock__Retry", (), ("GoToDock__Done",), action=_action_24)
+    b.transition("GoToDock__Retry", (), ("GoToDock__Moving",), cond=_cond_24)
+    b.transition("GoToDock__Retry", (), ("GoToDock__Done",), action=_action_25)
     b.node("GoToDock__Done", "final", "GoToDock", name="Done")
     b.transition("GoToDock", ("done.state.GoToDock",), ("Charging",))
     b.node(
@@ -303,9 +312,10 @@ def build() -> Chart:
         "state",
         "Main",
         name="Charging",
-        call=Call("Charge", "HardwareFunction", _args_25, (("battery", "battery"),)),
+        call=Call("Charge", "HardwareFunction", _args_26, (("battery", "battery"),)),
     )
-    b.transition("Charging", ("outcome.Charging.succeeded",), ("History",), action=_action_26)
+    b.transition("Charging", ("outcome.Charging.succeeded",), ("History",), action=_action_27)
+    b.transition("Charging", ("outcome.Charging.aborted",), ("Charging",), action=_action_28)
     b.node("BatteryMonitor", "state", "Operating", name="BatteryMonitor")
     b.initial("BatteryMonitor", ("Monitoring",))
     b.node(
@@ -313,10 +323,10 @@ def build() -> Chart:
         "state",
         "BatteryMonitor",
         name="Monitoring",
-        call=Call("BatteryMonitoring", "HardwareFunction", _args_27, ()),
+        call=Call("BatteryMonitoring", "HardwareFunction", _args_29, ()),
     )
     b.transition(
-        "Monitoring", ("batteryStatus",), ("Monitoring",), cond=_cond_28, action=_action_29
+        "Monitoring", ("batteryStatus",), ("Monitoring",), cond=_cond_30, action=_action_31
     )
     b.transition("Operating", ("missionAbort", "recall"), ("Stopped",))
     b.node("Stopped", "final", None, name="Stopped")

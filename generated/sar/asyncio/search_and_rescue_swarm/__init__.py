@@ -15,3 +15,10 @@ from . import uav, ugv
 MEMBER_TYPES: dict[str, ModuleType] = {"UAV": uav, "UGV": ugv}
 # member type -> number of members in the swarm composition
 COMPOSITION: dict[str, int] = {"UAV": 4, "UGV": 2}
+
+__all__ = [
+    "COMPOSITION",
+    "MEMBER_TYPES",
+    "uav",
+    "ugv",
+]

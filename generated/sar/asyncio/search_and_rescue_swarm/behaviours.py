@@ -48,7 +48,7 @@ SIGNATURES: dict[str, tuple[str, tuple[str, ...], tuple[str, ...], tuple[str, ..
     ),
     "Tracking": (
         "SwarmBehavior",
-        ("target_id", "altitude"),
+        ("target_id", "altitude", "rover_id"),
         (),
         ("succeeded", "aborted", "preempted", "targetLost"),
     ),

@@ -50,7 +50,7 @@ def _action_6(ctx: Context) -> None:
 
 def _args_7(ctx: Context) -> dict[str, Any]:
     d = ctx.data
-    return {"target_id": d["target_id"], "altitude": d["altitude"]}
+    return {"target_id": d["target_id"], "altitude": d["altitude"], "rover_id": d["rover_id"]}
 
 
 def _args_8(ctx: Context) -> dict[str, Any]:
@@ -108,6 +108,7 @@ def build() -> Chart:
         call=Call("TakeOff", "HardwareFunction", _args_1, ()),
     )
     b.transition("TakeOff", ("outcome.TakeOff.succeeded",), ("Loitering",))
+    b.transition("TakeOff", ("outcome.TakeOff.aborted",), ("Idle",))
     b.node("Loitering", "state", "SarBehavior", name="Loitering")
     b.transition("Loitering", ("missionStart",), ("Coverage",))
     b.node(
@@ -141,6 +142,7 @@ def build() -> Chart:
     )
     b.transition("Tracking", ("outcome.Tracking.succeeded",), ("Coverage",))
     b.transition("Tracking", ("outcome.Tracking.targetLost",), ("LocalCoverage",))
+    b.transition("Tracking", ("outcome.Tracking.aborted",), ("LocalCoverage",))
     b.node(
         "LocalCoverage",
         "state",
@@ -180,6 +182,7 @@ def build() -> Chart:
     b.transition("Mission", ("missionAbort",), ("Land",))
     b.node("Land", "state", None, name="Land", call=Call("Land", "HardwareFunction", _args_13, ()))
     b.transition("Land", ("outcome.Land.succeeded",), ("Landed",))
+    b.transition("Land", ("outcome.Land.aborted",), ("Land",))
     b.node("Landed", "final", None, name="Landed")
     b.initial(None, ("Mission",))
     return b.build()

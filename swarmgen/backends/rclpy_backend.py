@@ -1,0 +1,504 @@
+"""The rclpy backend: ROS 2 packages for a swarm.
+
+Output under `rclpy/`:
+
+- `<swarm>_interfaces/`: an ament_cmake/rosidl package (`swarmgen.ros.interfaces`): the `Event`
+  and `ActiveStates` messages and one action per library behaviour, named after the behaviour
+  (goal = inputs, result = outputs + outcome, feedback = status). Every behaviour gets an action
+  of its own, whatever `rosKind`/`rosType` the model declares: the declared types live in
+  packages that do not exist here (`cpswarm_msgs/action/Coverage`), so the generated nodes could
+  not import them; the declared kind, name and type are kept as read-only node parameters.
+- `<swarm>_nodes/`: an ament_python package: a node module per member type (its statechart,
+  behaviours, parameters), scripted action servers that simulate the behaviours, the swarm
+  launcher (`launch_swarm`, all members in one process), `launch/<swarm>.launch.py`, and
+  vendored copies of `swarmgen.runtime` (`_runtime/`) and `swarmgen.ros.runtime` (`_ros/`).
+
+Names: packages, modules, nodes, action and parameter names go through `names.ros_name` and are
+checked against ROS rules; action types and fields through `interfaces.check_*`. Model text
+reaches generated code only as `repr()` literals or `names.one_line` comments.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass
+from pathlib import Path, PurePosixPath
+from typing import Any
+from xml.sax.saxutils import escape
+
+from swarmgen import __version__
+from swarmgen.backends import Files
+from swarmgen.backends.pyrender import ChartRenderer, format_python, py_literal
+from swarmgen.backends.vendor import runtime_files
+from swarmgen.chart.model import BehaviourInfo, Chart
+from swarmgen.ir.nodes import Model, Value
+from swarmgen.names import IdAllocator, identifier, one_line, ros_name
+from swarmgen.render import render
+from swarmgen.ros.interfaces import (
+    ACTIVE_STATES_MSG,
+    EVENT_MSG,
+    behaviour_action,
+    check_field_name,
+    check_package_name,
+    check_type_name,
+    interface_type,
+    render_interface_package,
+)
+
+RUNTIME_MODULES = ("chart", "engine", "member", "replay")
+ROS_RUNTIME_DIR = Path(__file__).resolve().parent.parent / "ros" / "runtime"
+ROS_RUNTIME_MODULES = ("node", "simulated", "launcher", "replay")
+_RESERVED_TYPES = ("Event", "ActiveStates")
+# Module names double as executables and as launcher options (`--uav 2`): keep them clear of
+# the package's other modules and of the launcher's own options.
+_RESERVED_MODULES = (
+    "behaviours", "launch_swarm", "simulated_behaviours", "help", "h", "script", "time_scale",
+    "station", "duration", "no_simulation", "trace", "events", "server_timeout",
+)  # fmt: skip
+_OUTPUT_DEFAULTS: dict[str, Value] = {"Real": 0.0, "Integer": 0, "Boolean": False, "String": ""}
+# A relative ROS name: tokens of letters, digits and underscores (not leading digits), no `__`.
+_ROS_TOKEN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
+
+
+def swarm_name(model: Model) -> str:
+    return check_package_name(ros_name(model.name or "swarm"))
+
+
+def interfaces_package(model: Model) -> str:
+    return f"{swarm_name(model)}_interfaces"
+
+
+def nodes_package(model: Model) -> str:
+    return f"{swarm_name(model)}_nodes"
+
+
+def member_modules(charts: Iterable[Chart]) -> dict[str, str]:
+    """chart name -> module (and node, executable) name: lower snake case, unique."""
+    taken = IdAllocator(_RESERVED_MODULES)
+    return {
+        chart.name: taken.claim(ros_name(chart.name), f"{ros_name(chart.name)}_member")
+        for chart in charts
+    }
+
+
+def field_type(type_name: str | None) -> str:
+    """How a value of a model type travels in a ROS field: float64, int64, bool, string, or
+    json (a string field carrying JSON: data types such as Pose, and untyped values)."""
+    ros = interface_type(type_name)
+    if ros == "string" and (type_name or "").strip().lower() != "string":
+        return "json"
+    return ros
+
+
+def is_relative_ros_name(name: str) -> bool:
+    tokens = name.split("/")
+    return all(_ROS_TOKEN.fullmatch(t) and "__" not in t for t in tokens)
+
+
+def _camel(name: str) -> str:
+    parts = re.split(r"[^0-9A-Za-z]+", identifier(name))
+    text = "".join(p[:1].upper() + p[1:] for p in parts if p)
+    return text if text[:1].isalpha() else f"B{text}"
+
+
+def _field_name(name: str, taken: set[str]) -> str:
+    base = ros_name(name)
+    for candidate in (base, f"{base}_value", *(f"{base}_{n}" for n in range(2, 100))):
+        try:
+            check_field_name(candidate)
+        except ValueError:
+            continue
+        if candidate not in taken:
+            taken.add(candidate)
+            return candidate
+    raise ValueError(f"no ROS field name for {name!r}")
+
+
+@dataclass(frozen=True)
+class FieldView:
+    name: str  # the model's identifier (argument / output)
+    field: str  # ROS field name
+    type: str  # float64, int64, bool, string, json
+    model_type: str | None
+
+
+@dataclass(frozen=True)
+class BehaviourView:
+    info: BehaviourInfo
+    action: str
+    ros_name: str
+    inputs: tuple[FieldView, ...]
+    outputs: tuple[FieldView, ...]
+    note: str  # why the action name differs from the declared rosName ("" if it does not)
+
+    @property
+    def action_text(self) -> str:
+        return behaviour_action(
+            [(f.field, f.model_type) for f in self.inputs],
+            [(f.field, f.model_type) for f in self.outputs],
+        )
+
+    def spec(self) -> str:
+        """The `BehaviourSpec(...)` literal of generated code."""
+        declared = (
+            self.info.ros_kind or "",
+            self.info.ros_name or "",
+            self.info.ros_type or "",
+        )
+
+        def fields(items: tuple[FieldView, ...]) -> str:
+            inner = "".join(f"Field({f.name!r}, {f.field!r}, {f.type!r}), " for f in items)
+            return f"({inner})"
+
+        return (
+            f"BehaviourSpec(name={self.info.name!r}, action={self.action!r}, "
+            f"ros_name={self.ros_name!r}, kind={self.info.kind!r}, "
+            f"inputs={fields(self.inputs)}, outputs={fields(self.outputs)}, "
+            f"outcomes={tuple(self.info.outcomes)!r}, declared={declared!r})"
+        )
+
+
+def behaviour_views(charts: tuple[Chart, ...]) -> dict[str, BehaviourView]:
+    """Every behaviour the charts run, by model name, with its action type, name and fields."""
+    infos: dict[str, BehaviourInfo] = {}
+    for chart in charts:
+        for info in chart.behaviours:
+            infos.setdefault(info.name, info)
+    types: set[str] = set(_RESERVED_TYPES)
+    names: set[str] = set()
+    views = {}
+    for name in sorted(infos):
+        info = infos[name]
+        action = _camel(info.ident or info.name)
+        candidate, n = action, 2
+        while candidate in types:
+            candidate, n = f"{action}{n}", n + 1
+        types.add(check_type_name(candidate))
+        note = ""
+        declared = (info.ros_name or "").strip()
+        if declared.startswith("/"):
+            declared, note = declared.lstrip("/"), "absolute rosName made relative to the member"
+        if declared and not is_relative_ros_name(declared):
+            declared, note = "", f"rosName {declared!r} is not a valid ROS name"
+        action_name = declared or ros_name(info.name)
+        if action_name in names:
+            note = note or f"rosName {action_name!r} is used by another behaviour"
+            base = ros_name(info.name)
+            action_name = base
+            n = 2
+            while action_name in names:
+                action_name, n = f"{base}_{n}", n + 1
+        names.add(action_name)
+        in_taken: set[str] = set()
+        out_taken: set[str] = {"outcome"}
+        inputs = tuple(
+            FieldView(ident, _field_name(ident, in_taken), field_type(type_), type_)
+            for ident, type_ in info.inputs
+        )
+        outputs = tuple(
+            FieldView(ident, _field_name(ident, out_taken), field_type(type_), type_)
+            for ident, type_ in info.outputs
+        )
+        views[name] = BehaviourView(info, candidate, action_name, inputs, outputs, note)
+    return views
+
+
+def _parameter(name: str, type_: str, default: Value, **extra: Any) -> str:
+    options = "".join(f", {k}={v!r}" for k, v in extra.items() if v not in (None, False, ""))
+    return f"Parameter({name!r}, {type_!r}, {py_literal(default)}{options})"
+
+
+def member_parameters(model: Model, chart: Chart, views: dict[str, BehaviourView]) -> list[str]:
+    """`Parameter(...)` literals: member data defaults, hardware parameters (read only) and the
+    declared ROS binding of each behaviour the member runs (read only metadata)."""
+    taken = IdAllocator()
+    found = []
+    for item in chart.data:
+        name = taken.claim(f"data.{ros_name(item.id)}")
+        found.append(
+            _parameter(
+                name,
+                field_type(item.type),
+                item.default,
+                data=item.id,
+                description=f"member data {item.name} ({item.type or 'untyped'})",
+            )
+        )
+    member = next((m for m in model.member_types if m.name == chart.member), None)
+    components = {h.id: h for h in model.hardware}
+    for part in member.hardware if member is not None else ():
+        prefix = f"hardware.{ros_name(part.name)}"
+        found.append(
+            _parameter(
+                taken.claim(f"{prefix}.count"),
+                "int64",
+                part.count,
+                read_only=True,
+                description=f"{part.name}: {part.count} x {part.type_name}",
+            )
+        )
+        component = components.get(part.type_id)
+        if component is None:
+            continue
+        for prop in component.parameters:
+            found.append(
+                _parameter(
+                    taken.claim(f"{prefix}.{ros_name(prop.ident)}"),
+                    field_type(prop.type) if prop.type else "json",
+                    prop.default,
+                    read_only=True,
+                    description=f"{component.name}.{prop.name} ({prop.type or 'untyped'})",
+                )
+            )
+        for key, value in (
+            ("communication_type", component.communication_type),
+            ("communication_params", component.communication_params),
+        ):
+            if value is not None:
+                found.append(
+                    _parameter(taken.claim(f"{prefix}.{key}"), "string", value, read_only=True)
+                )
+    for info in chart.behaviours:
+        view = views[info.name]
+        prefix = f"behaviours.{ros_name(info.name)}"
+        for key, value in (
+            ("ros_kind", info.ros_kind),
+            ("ros_name", info.ros_name),
+            ("ros_type", info.ros_type),
+        ):
+            if value:
+                found.append(
+                    _parameter(
+                        taken.claim(f"{prefix}.{key}"),
+                        "string",
+                        value,
+                        read_only=True,
+                        description=f"declared by the model; run as action {view.action} at {view.ros_name}",
+                    )
+                )
+    return found
+
+
+def default_scripts(charts: tuple[Chart, ...]) -> dict[str, dict[str, Any]]:
+    """Simulated behaviours: those whose outcome a transition waits for succeed after 1 s with
+    default outputs; the others run until they are preempted (monitors, positioning, ...)."""
+    scripts: dict[str, dict[str, Any]] = {}
+    for chart in charts:
+        nodes = chart.walk()
+        waited = {
+            e for n in nodes for t in n.transitions for e in t.events if e.startswith("outcome.")
+        }
+        for node in nodes:
+            if node.call is None:
+                continue
+            info = next(b for b in chart.behaviours if b.name == node.call.behaviour)
+            ended = any(
+                e == f"outcome.{node.id}" or e.startswith(f"outcome.{node.id}.") for e in waited
+            )
+            if not ended:
+                scripts.setdefault(info.name, {"forever": True})
+                continue
+            outputs = {name: _OUTPUT_DEFAULTS.get(t or "") for name, t in info.outputs}
+            scripts[info.name] = {"duration": 1.0, "outcome": "succeeded", "outputs": outputs}
+    return dict(sorted(scripts.items()))
+
+
+class RclpyBackend:
+    name = "rclpy"
+
+    def render(self, model: Model, charts: tuple[Chart, ...]) -> Files:
+        if not charts:
+            return {}  # no state machine, nothing to run
+        swarm = swarm_name(model)
+        interfaces = interfaces_package(model)
+        package = nodes_package(model)
+        views = behaviour_views(charts)
+        source = charts[0].source
+        common = {"version": __version__, "source": one_line(source)}
+        files: Files = {}
+
+        description = one_line(f"ROS 2 interfaces of swarm {model.name} (generated by swarmgen)")
+        interface_files = render_interface_package(
+            interfaces,
+            {"Event": EVENT_MSG, "ActiveStates": ACTIVE_STATES_MSG},
+            {v.action: v.action_text for v in views.values()},
+            description,
+        )
+        for path, text in interface_files.items():
+            files[PurePosixPath(interfaces) / path] = text
+
+        root = PurePosixPath(package)
+        python = root / package
+        modules = member_modules(charts)
+        members = {chart.member or chart.name: modules[chart.name] for chart in charts}
+        composition = {p.type_name: p.count for s in model.swarms for p in s.members}
+        composition = {kind: composition.get(kind, 1) for kind in members}
+        swarm_counts = {c.name: composition[c.member or c.name] for c in charts}
+        events: dict[str, tuple[str, str]] = {}
+        for event in model.events:
+            events.setdefault(event.name, (event.ident, event.scope or "swarm"))
+        for event in model.events:
+            events.setdefault(event.ident, (event.ident, event.scope or "swarm"))
+        launch_file = f"{swarm}.launch.py"
+        view = {
+            **common,
+            "model": _doc(model.name),
+            "model_repr": repr(model.name),
+            "package": package,
+            "interfaces": interfaces,
+            "swarm": swarm,
+            "modules": sorted(modules.values()),
+            "members": members,
+            "composition_literal": repr(composition),
+            "interfaces_literal": repr(interfaces),
+            "launch_file": launch_file,
+        }
+
+        for chart in charts:
+            files[python / f"{modules[chart.name]}.py"] = render_member(
+                chart, model, views, modules[chart.name], interfaces, common
+            )
+        files[python / "__init__.py"] = format_python(
+            render(
+                "rclpy/package_init.py.j2",
+                **view,
+                member_modules=repr(members),
+                events_literal=repr(dict(sorted(events.items()))),
+                first_flags=" ".join(f"--{m.replace('_', '-')} 2" for m in members.values()),
+            )
+        )
+        files[python / "behaviours.py"] = format_python(
+            render("rclpy/behaviours.py.j2", **view, scripts=repr(default_scripts(charts)))
+        )
+        files[python / "launch_swarm.py"] = format_python(
+            render(
+                "rclpy/launch_swarm.py.j2",
+                **view,
+                first_flags=" ".join(f"--{m.replace('_', '-')} 2" for m in members.values()),
+            )
+        )
+        files[root / "launch" / launch_file] = format_python(
+            render(
+                "rclpy/launch.py.j2",
+                **view,
+                entries=launch_entries(members, composition),
+                swarm_literal=repr(json.dumps(swarm_counts, sort_keys=True)),
+            )
+        )
+        files[root / "setup.py"] = format_python(
+            render(
+                "rclpy/setup.py.j2",
+                **view,
+                description=repr(
+                    one_line(f"Swarm {model.name}: member nodes (generated by swarmgen)")
+                ),
+                entry_points=[f"{m} = {package}.{m}:main" for m in sorted(members.values())],
+            )
+        )
+        files[root / "setup.cfg"] = render("rclpy/setup.cfg.j2", **view)
+        files[root / "package.xml"] = render(
+            "rclpy/package.xml.j2",
+            **view,
+            description=_xml(f"Swarm {model.name}: member nodes, simulated behaviours, launcher"),
+        )
+        files[root / "resource" / package] = ""
+        rows = [
+            {
+                "name": _md(v.info.name),
+                "action": v.action,
+                "ros_name": v.ros_name,
+                "declared": _md(
+                    " ".join(x for x in (v.info.ros_kind, v.info.ros_name, v.info.ros_type) if x)
+                    or "-"
+                ),
+            }
+            for v in views.values()
+        ]
+        files[PurePosixPath("README.md")] = render(
+            "rclpy/README.md.j2", **view, model_md=_md(model.name), behaviours=rows
+        )
+        files.update(runtime_files(python / "_runtime", RUNTIME_MODULES))
+        files.update(ros_runtime_files(python / "_ros"))
+        return files
+
+
+def launch_entries(members: dict[str, str], composition: dict[str, int]) -> list[dict[str, Any]]:
+    entries = []
+    for kind, module in members.items():
+        for index in range(1, composition[kind] + 1):
+            entries.append(
+                {
+                    "kind": repr(kind),
+                    "module": module,
+                    "member_id": f"{module}_{index}",
+                    "index": index,
+                }
+            )
+    return entries
+
+
+def render_member(
+    chart: Chart,
+    model: Model,
+    views: dict[str, BehaviourView],
+    module: str,
+    interfaces: str,
+    common: dict[str, str],
+) -> str:
+    code = ChartRenderer(chart).render()
+    scopes = {e.ident: e.scope or "swarm" for e in chart.events}
+    what = f"member type {chart.member}" if chart.member else f"state machine {chart.machine}"
+    behaviours = [views[b.name] for b in chart.behaviours]
+    text = render(
+        "rclpy/member.py.j2",
+        **common,
+        what=_doc(what),
+        doc=_doc(f"Behaviour of {what} (state machine {chart.machine}) as a ROS 2 node."),
+        chart_name=repr(chart.name),
+        member_type=repr(chart.member or chart.name),
+        machine=repr(chart.machine),
+        node_name=repr(module),
+        interfaces=repr(interfaces),
+        event_scopes=repr(scopes),
+        behaviours="{" + ", ".join(f"{v.info.name!r}: {v.spec()}" for v in behaviours) + "}",
+        parameters="(" + "".join(f"{p}, " for p in member_parameters(model, chart, views)) + ")",
+        notes=[f"{one_line(v.info.name)}: {one_line(v.note)}" for v in behaviours if v.note],
+        code=code,
+    )
+    return format_python(text)
+
+
+_IMPORTS = (
+    (re.compile(r"^from \.\.\.runtime\.(\w+) import", re.MULTILINE), r"from .._runtime.\1 import"),
+)
+
+
+def ros_runtime_files(folder: PurePosixPath) -> dict[PurePosixPath, str]:
+    """`swarmgen.ros.runtime` for the generated package: `...runtime` becomes `.._runtime`."""
+    files = {}
+    for module in ("__init__", *ROS_RUNTIME_MODULES):
+        text = (ROS_RUNTIME_DIR / f"{module}.py").read_text(encoding="utf-8")
+        for pattern, replacement in _IMPORTS:
+            text = pattern.sub(replacement, text)
+        header = (
+            f"# @generated by swarmgen {__version__}: a copy of swarmgen.ros.runtime.{module}."
+            " Do not edit.\n"
+        )
+        files[folder / f"{module}.py"] = header + text
+    return files
+
+
+def _doc(text: str) -> str:
+    """Model text inside a docstring or comment line: one line, no quotes or backslashes."""
+    return one_line(text).replace('"', "'").replace("\\", "/")
+
+
+def _md(text: str) -> str:
+    """Model names inside a Markdown table: no pipes, backticks or line breaks."""
+    return " ".join(one_line(text).replace("|", "/").replace("`", "'").split())
+
+
+def _xml(text: str) -> str:
+    return escape(" ".join(one_line(text).split()))

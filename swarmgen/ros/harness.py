@@ -1,0 +1,112 @@
+"""Running generated rclpy code from swarmgen (replay, tests, benchmarks): the environment every
+ROS 2 process gets, and the replay of one member node in a subprocess.
+
+Every ROS process runs with `ROS_AUTOMATIC_DISCOVERY_RANGE` set (LOCALHOST: no multicast on the
+real network; OFF: in-process only, used by replay, which then cannot meet any other ROS
+process), its own `ROS_LOG_DIR`, a `HOME` (rclpy's logging needs one) and under
+`timeout -k 5 <s>`, because a wedged rclpy process ignores SIGTERM.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from swarmgen.backends.rclpy_backend import interfaces_package, member_modules, nodes_package
+from swarmgen.chart.model import Chart
+from swarmgen.ir.nodes import Model
+from swarmgen.ros.interfaces import InterfaceBuildError, build_and_install
+
+
+class RosUnavailable(RuntimeError):
+    """rclpy (the `ros` extra) is not installed, or the interfaces cannot be built."""
+
+
+class RosRunError(RuntimeError):
+    """A ROS subprocess failed or timed out."""
+
+
+def ros_env(
+    log_dir: Path,
+    *,
+    domain_id: int | None = None,
+    discovery: str = "LOCALHOST",
+    python_path: Sequence[Path] = (),
+    base: Mapping[str, str] | None = None,
+) -> dict[str, str]:
+    """The environment of a ROS 2 subprocess (see the module docstring)."""
+    env = dict(os.environ if base is None else base)
+    env.pop("ROS_LOCALHOST_ONLY", None)  # ignored by Kilted; do not pretend it isolates
+    env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery
+    if domain_id is not None:
+        env["ROS_DOMAIN_ID"] = str(domain_id)
+    env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 200))
+    env["ROS_LOG_DIR"] = str(log_dir)
+    env.setdefault("HOME", str(log_dir))
+    if python_path:
+        paths = [str(p) for p in python_path]
+        if env.get("PYTHONPATH"):
+            paths.append(env["PYTHONPATH"])
+        env["PYTHONPATH"] = os.pathsep.join(paths)
+    return env
+
+
+def check_rclpy() -> None:
+    if importlib.util.find_spec("rclpy") is None:
+        raise RosUnavailable("rclpy is not installed: run `make ros` (pip install -e '.[ros]')")
+
+
+def build_interfaces(rclpy_dir: Path, model: Model) -> Path:
+    """Build and install the model's interface package into this venv (skipped when current)."""
+    check_rclpy()
+    try:
+        return build_and_install(rclpy_dir / interfaces_package(model))
+    except InterfaceBuildError as err:
+        raise RosUnavailable(f"cannot build the ROS 2 interfaces: {err}") from None
+
+
+def replay_rclpy(
+    rclpy_dir: Path,
+    model: Model,
+    charts: Sequence[Chart],
+    chart_name: str,
+    scenarios: Sequence[Sequence[Mapping[str, Any]]],
+    stats: dict[str, int] | None = None,
+) -> list[list[dict[str, Any]]]:
+    """Replay scenarios on one member node (real rclpy, one subprocess for all of them).
+    `stats` receives the harness's counters (see `swarmgen.ros.runtime.replay`)."""
+    build_interfaces(rclpy_dir, model)
+    package = nodes_package(model)
+    module = member_modules(charts)[chart_name]
+    steps = sum(len(s) for s in scenarios)
+    limit = 60 + len(scenarios) + steps // 2
+    with tempfile.TemporaryDirectory(prefix="swarmgen-rclpy-replay-") as tmp:
+        path = Path(tmp) / "scenarios.json"
+        path.write_text(json.dumps([list(s) for s in scenarios]), encoding="utf-8")
+        env = ros_env(Path(tmp) / "roslog", discovery="OFF", python_path=[rclpy_dir / package])
+        command = [
+            "timeout", "-k", "5", str(limit), sys.executable,
+            "-m", f"{package}._ros.replay", f"{package}.{module}", str(path),
+        ]  # fmt: skip
+        completed = subprocess.run(
+            command, capture_output=True, text=True, env=env, check=False, timeout=limit + 30
+        )
+    if completed.returncode != 0:
+        tail = "\n".join(completed.stderr.strip().splitlines()[-15:])
+        what = "timed out" if completed.returncode in (124, 137) else "failed"
+        raise RosRunError(f"rclpy replay {what} (exit {completed.returncode}):\n{tail}")
+    traces: list[list[dict[str, Any]]] = [[] for _ in scenarios]
+    for line in completed.stdout.splitlines():
+        if line.startswith("{"):
+            record = json.loads(line)
+            traces[record["scenario"]] = record["trace"]
+            if stats is not None:
+                stats.update(record["stats"])
+    return traces

@@ -1,0 +1,503 @@
+"""The abstract world of the paper's "Performance Evaluation", in numpy, for a batch of runs.
+
+A bounded grid of `width` x `height` patches without obstacles; patch (i, j) is the unit square
+centred on the point (i, j), so a body at (x, y) stands on patch (floor(x + 0.5), floor(y + 0.5)).
+Members move one patch length per tick. A member sees the patches within `view` of its own in
+both axes (view 1: its patch and the 8 around it, the Moore neighbourhood).
+
+The batch holds `runs` independent repetitions with the same composition; member `g` of the
+batch is member `g % per_run` of run `g // per_run`. Everything is an array over all members or
+all runs, so one numpy call advances every member of every repetition.
+
+Coverage is the random-direction algorithm: a covering member flies straight until its next
+step would leave the grid, then turns to a uniformly random direction that keeps it inside
+(drawn again until it does). Movement is computed a straight segment at a time: at tick k a
+body is at `origin + (k - s0) * heading`, with the same floating-point expression everywhere, so
+results do not depend on how ticks are grouped into rounds. Internally positions are kept in
+patch-corner coordinates (u = x + 0.5), where the patch is simply floor(u). Random draws come
+from a counter-based generator keyed by (run, member, draw number): the same seed gives the same
+numbers however runs are batched or spread over processes.
+
+Coverage is recorded as times: `first[c]` is the first tick a covering member stood on patch c;
+when each patch was first *seen* is the minimum of `first` over the view around it
+(`seen_times`), so coverage times to any percentage are order statistics. During the run only
+the count of patches seen is kept up to date (`covered`), for the stop condition.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+INF = int(np.iinfo(np.int32).max)  # "never": a patch not (yet) seen
+I64 = NDArray[np.int64]
+F64 = NDArray[np.float64]
+U64 = NDArray[np.uint64]
+Bool = NDArray[np.bool_]
+
+UNFOUND, FOUND, CLAIMED, RESCUED = 0, 1, 2, 3  # target status
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MEMBER = np.uint64(0xD1B54A32D192ED03)
+_BLOCK = 8  # turn directions drawn at once
+_GAMMAS = np.arange(_BLOCK + 1, dtype=np.uint64) * _GOLDEN  # k * gamma, wrapping
+
+
+def mix64(z: U64) -> U64:
+    """splitmix64's finaliser: a bijection on 64-bit words with good avalanche."""
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@dataclass(frozen=True)
+class Geometry:
+    width: int = 201
+    height: int = 201
+    view: int = 1  # Chebyshev radius of what a member sees (1: Moore neighbourhood)
+
+    @property
+    def cells(self) -> int:
+        return self.width * self.height
+
+
+def south_line(count: int, geometry: Geometry, spacing: float) -> tuple[F64, F64]:
+    """`count` start points on the south side, centred, `spacing` patches apart (closer when
+    they would not fit), west to east."""
+    centre = (geometry.width - 1) / 2
+    if count > 1:
+        spacing = min(spacing, (geometry.width - 1) / (count - 1))
+    offsets = (np.arange(count, dtype=np.float64) - (count - 1) / 2) * spacing
+    return centre + offsets, np.zeros(count, dtype=np.float64)
+
+
+def fan_headings(count: int) -> F64:
+    """Directions (radians, counter-clockwise from east) dividing the northern half-plane
+    regularly, one per member west to east: each member takes the bisector of its sector, so
+    one member flies north, two fly north-west and north-east, and so on."""
+    return math.pi - math.pi * (np.arange(count, dtype=np.float64) + 0.5) / max(count, 1)
+
+
+def _distinct(index: I64, stamp: NDArray[np.int32]) -> I64:
+    """The distinct values of `index`, in O(n) with a scratch array as large as the index
+    space: every position writes its number, the positions whose number survived are one per
+    value."""
+    order = np.arange(len(index), dtype=np.int32)
+    stamp[index] = order
+    distinct: I64 = index[stamp[index] == order]
+    return distinct
+
+
+@dataclass(frozen=True)
+class Points:
+    """Patches passed in one round, piece by piece (a piece is a straight stretch of one
+    member): per point its steps from the segment's origin and its flat patch index (run
+    included); the points of piece i start at `first[i]`."""
+
+    gm: I64  # member of each piece
+    s0: I64  # segment origin tick of each piece
+    first: I64  # index of each piece's first point
+    steps: I64
+    flat: I64
+
+    @staticmethod
+    def empty() -> Points:
+        e = np.zeros(0, dtype=np.int64)
+        return Points(e, e, e, e, e)
+
+    def __len__(self) -> int:
+        return len(self.flat)
+
+    def piece(self, at: I64) -> I64:
+        return np.searchsorted(self.first, at, side="right") - 1
+
+    def ticks(self, at: I64) -> I64:
+        return self.steps[at] + self.s0[self.piece(at)]
+
+    def members(self, at: I64) -> I64:
+        return self.gm[self.piece(at)]
+
+    def until(self, end: I64, cells: int) -> Points:
+        """The points at or before each run's end tick (pieces become one per point)."""
+        every = np.arange(len(self.flat))
+        keep = np.flatnonzero(self.ticks(every) <= end[self.flat // cells])
+        piece = self.piece(keep)
+        return Points(
+            self.gm[piece], self.s0[piece], np.arange(len(keep)), self.steps[keep], self.flat[keep]
+        )
+
+
+class World:
+    """Bodies, coverage and targets of `runs` repetitions; see the module docstring."""
+
+    def __init__(
+        self,
+        geometry: Geometry,
+        run_keys: U64,
+        start_x: F64,
+        start_y: F64,
+        headings: F64,
+        targets: I64,
+    ) -> None:
+        """`start_x`, `start_y`, `headings`: per member of one run; `run_keys`: one random key
+        per run; `targets`: (runs, count, 2) patch coordinates."""
+        self.geometry = geo = geometry
+        self.W, self.H, self.v = geo.width, geo.height, geo.view
+        self.WH = geo.cells
+        self.PW, self.PH = geo.width + 2 * geo.view, geo.height + 2 * geo.view
+        self.PWH = self.PW * self.PH
+        self.runs = runs = len(run_keys)
+        self.per_run = per_run = len(start_x)
+        count = runs * per_run
+        self.run_of: I64 = np.repeat(np.arange(runs, dtype=np.int64), per_run)
+        member = np.tile(np.arange(per_run, dtype=np.uint64), runs)
+        run_keys = np.asarray(run_keys, dtype=np.uint64)
+        # each member's random stream: splitmix64, state = key + draws * golden gamma
+        self.stream: U64 = mix64(run_keys[self.run_of] + member * _MEMBER)
+        # the body, in patch-corner coordinates: position (the segment's origin while
+        # covering), heading, the segment's first and last tick
+        self.body: NDArray[np.float64] = np.empty((count, 4), dtype=np.float64)
+        self.ox: F64 = self.body[:, 0]  # views: the columns of `body`
+        self.oy: F64 = self.body[:, 1]
+        self.dx: F64 = self.body[:, 2]
+        self.dy: F64 = self.body[:, 3]
+        self.ox[:] = np.tile(np.asarray(start_x, dtype=np.float64), runs) + 0.5
+        self.oy[:] = np.tile(np.asarray(start_y, dtype=np.float64), runs) + 0.5
+        self.dx[:] = np.tile(np.cos(headings), runs)
+        self.dy[:] = np.tile(np.sin(headings), runs)
+        self.s0: I64 = np.zeros(count, dtype=np.int64)
+        self.seg_end: I64 = np.zeros(count, dtype=np.int64)
+        self.start_cell: I64 = np.floor(self.oy).astype(np.int64) * self.W + np.floor(
+            self.ox
+        ).astype(np.int64)
+        self.moving: Bool = np.zeros(count, dtype=np.bool_)  # running Coverage
+        self.detecting: Bool = np.zeros(count, dtype=np.bool_)  # running TargetMonitoring
+        self.reports: Bool = np.zeros(count, dtype=np.bool_)  # its Coverage ends on a find
+        # coverage: first tick on each patch, which patches were stood on / seen (the seen
+        # flags are padded by `view` so a view never needs bounds checks), patches seen per run
+        self.first: NDArray[np.int32] = np.full(runs * self.WH, INF, dtype=np.int32)
+        self.stood: NDArray[np.uint8] = np.zeros(runs * self.WH, dtype=np.uint8)
+        seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
+        seen[:, self.v : self.v + self.H, self.v : self.v + self.W] = 0
+        self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
+        self.covered: I64 = np.zeros(runs, dtype=np.int64)
+        self._stamp_first: NDArray[np.int32] = np.zeros(runs * self.WH, dtype=np.int32)
+        self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
+        side = 2 * self.v + 1
+        oy_, ox_ = np.divmod(np.arange(side * side, dtype=np.int64), side)
+        self._view_offsets: I64 = (oy_ - self.v) * self.PW + (ox_ - self.v)
+        # targets
+        targets = np.asarray(targets, dtype=np.int64).reshape(runs, -1, 2)
+        self.tx: I64 = targets[:, :, 0].copy()
+        self.ty: I64 = targets[:, :, 1].copy()
+        shape = self.tx.shape
+        self.status: NDArray[np.int8] = np.zeros(shape, dtype=np.int8)
+        self.finder: I64 = np.full(shape, -1, dtype=np.int64)
+        self.found_tick: I64 = np.full(shape, -1, dtype=np.int64)  # first find taken up
+        self.reported_tick: I64 = np.full(shape, -1, dtype=np.int64)  # latest targetFound
+        self.rescued_tick: I64 = np.full(shape, -1, dtype=np.int64)
+        self.unfound: I64 = np.full(runs, shape[1], dtype=np.int64)
+        self.fresh: list[list[int]] = [[] for _ in range(runs)]  # reported this tick
+        # near[c] > 0: an unfound target is in view from patch c
+        self.near: NDArray[np.int16] = np.zeros(runs * self.WH, dtype=np.int16)
+        for run in range(runs):
+            for target in range(shape[1]):
+                self._near_add(run, target, 1)
+
+    # --- geometry
+
+    def _inside(self, u: F64, w: F64) -> Bool:
+        return (u >= 0) & (u < self.W) & (w >= 0) & (w < self.H)
+
+    def where(self, member: int, tick: int | None = None) -> tuple[float, float]:
+        """Where a member is (at `tick` if it is covering)."""
+        steps = float(tick - self.s0[member]) if tick is not None and self.moving[member] else 0.0
+        u = self.ox[member] + steps * self.dx[member]
+        w = self.oy[member] + steps * self.dy[member]
+        return float(u) - 0.5, float(w) - 0.5
+
+    def place(self, member: int, x: float, y: float) -> None:
+        """Put a standing member at (x, y) (a drive ends, or is stopped on the way)."""
+        self.ox[member], self.oy[member] = x + 0.5, y + 0.5
+
+    def _longest(self, ox: F64, oy: F64, dx: F64, dy: F64) -> I64:
+        """How many steps each body can go straight before its next step would leave the grid.
+        The closed form is checked (and corrected) with the position expression itself."""
+        big = float(self.W + self.H)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            nx = np.where(dx > 0, self.W - ox, -ox) / dx  # dx == 0: +-inf or nan
+            ny = np.where(dy > 0, self.H - oy, -oy) / dy
+        limit = np.fmin(np.where(dx == 0, big, nx), np.where(dy == 0, big, ny))
+        n: I64 = np.clip(limit, 0, big).astype(np.int64)  # >= 0: truncation is floor
+        for _ in range(4):
+            steps = n.astype(np.float64)
+            out = (n > 0) & ~self._inside(ox + steps * dx, oy + steps * dy)
+            steps += 1.0
+            more = ~out & self._inside(ox + steps * dx, oy + steps * dy)
+            if not (out.any() or more.any()):
+                break
+            n -= out
+            n += more
+        return n
+
+    def uniforms(self, g: I64, count: int) -> F64:
+        """The next `count` uniform numbers in [0, 1) of each member's own random stream
+        (shape (len(g), count)), without consuming them (see `consume`). The stream is
+        splitmix64 keyed by (run key, member): a draw depends only on the run's key, the
+        member and the draw's number."""
+        z = mix64(self.stream[g][:, None] + _GAMMAS[None, 1 : count + 1])
+        return (z >> np.uint64(11)).astype(np.float64) * (1.0 / 9007199254740992.0)
+
+    def consume(self, g: I64, used: I64) -> None:
+        self.stream[g] += _GAMMAS[used]
+
+    # --- covering
+
+    def start_covering(self, member: int, tick: int, reports: bool) -> list[int]:
+        """Coverage starts: the member goes on from where it stands, in its current direction.
+        Its view now counts as seen; returns the unfound targets in view (if it detects)."""
+        g = np.array([member], dtype=np.int64)
+        self.stop_covering(member, tick)  # a second Coverage goes on from where it is
+        self.moving[member] = True
+        self.reports[member] = reports
+        self.s0[member] = tick
+        self.seg_end[member] = tick + int(
+            self._longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g])[0]
+        )
+        ix, iy = int(self.ox[member]), int(self.oy[member])
+        flat = np.array([int(self.run_of[member]) * self.WH + iy * self.W + ix])
+        zero = np.zeros(1, dtype=np.int64)
+        self._commit(Points(g, np.array([tick], dtype=np.int64), zero, zero, flat))
+        if self.detects(member):
+            return self.targets_in_view(member, ix, iy)
+        return []
+
+    def stop_covering(self, member: int, tick: int) -> None:
+        """Coverage ends (finished or preempted): the body stands where it is at `tick`."""
+        if not self.moving[member]:
+            return
+        steps = np.float64(tick - self.s0[member])
+        self.ox[member] = self.ox[member] + steps * self.dx[member]
+        self.oy[member] = self.oy[member] + steps * self.dy[member]
+        self.moving[member] = False
+        self.reports[member] = False
+
+    def detects(self, member: int) -> bool:
+        return bool(self.detecting[member] or self.reports[member])
+
+    def _turn(self, g: I64) -> None:
+        """Members whose next step would leave the grid: new origin where they stand, a new
+        random direction that keeps them inside, a new straight segment."""
+        body = self.body[g]
+        s0 = self.seg_end[g]
+        steps = (s0 - self.s0[g]).astype(np.float64)
+        ox = body[:, 0] + steps * body[:, 2]
+        oy = body[:, 1] + steps * body[:, 3]
+        body[:, 0], body[:, 1] = ox, oy
+        todo = np.arange(len(g))
+        for _ in range(16):  # candidates in blocks; the first that keeps the body inside wins
+            gt = g[todo]
+            angle = (2.0 * math.pi) * self.uniforms(gt, _BLOCK)
+            cx, cy = np.cos(angle), np.sin(angle)
+            cx += ox[todo, None]
+            cy += oy[todo, None]
+            ok = self._inside(cx, cy)
+            pick = np.argmax(ok, axis=1)
+            rows = np.flatnonzero(ok[np.arange(len(todo)), pick])
+            chosen = angle[rows, pick[rows]]
+            done = todo[rows]
+            body[done, 2], body[done, 3] = np.cos(chosen), np.sin(chosen)
+            used = np.full(len(todo), _BLOCK, dtype=np.int64)
+            used[rows] = pick[rows] + 1  # only the draws up to the chosen one are used
+            self.consume(gt, used)
+            if len(rows) == len(todo):
+                break
+            todo = np.delete(todo, rows)
+        else:  # vanishingly unlikely: head for the centre
+            cx = self.W / 2 - ox[todo]
+            cy = self.H / 2 - oy[todo]
+            norm = np.hypot(cx, cy)
+            body[todo, 2], body[todo, 3] = cx / norm, cy / norm
+        self.body[g] = body
+        self.s0[g] = s0
+        self.seg_end[g] = s0 + self._longest(ox, oy, body[:, 2], body[:, 3])
+
+    def _pieces(self, g: I64, cur: I64, horizon: I64, expand: bool = True) -> Points:
+        """Move members `g` from tick `cur` to `horizon` (turning at the boundary as often as
+        needed); returns every patch passed, ticks cur+1..horizon."""
+        ints: list[tuple[I64, I64, I64, I64]] = []  # member, start tick, steps, segment s0
+        floats: list[NDArray[np.float64]] = []  # segment origin and heading (body rows)
+        while g.size:
+            seg_end = self.seg_end[g]
+            n = np.minimum(seg_end, horizon) - cur
+            if expand:
+                ints.append((g, cur, n, self.s0[g]))
+                floats.append(self.body[g])
+            turning = seg_end < horizon
+            if not turning.any():
+                break
+            g, horizon, cur = g[turning], horizon[turning], seg_end[turning]
+            self._turn(g)
+        if not ints:
+            return Points.empty()
+        gm, start, n, s0 = (np.concatenate([p[i] for p in ints]) for i in range(4))
+        body = np.concatenate(floats)
+        ox, oy, dx, dy = body[:, 0], body[:, 1], body[:, 2], body[:, 3]
+        total = int(n.sum())
+        if not total:
+            return Points.empty()
+        first = np.cumsum(n) - n
+        # steps from the segment origin: (cur - s0) + 1 .. (cur - s0) + n
+        steps_i = np.arange(1, total + 1, dtype=np.int64)
+        steps_i += np.repeat(start - s0 - first, n)
+        steps = steps_i.astype(np.float64)
+        u = steps * np.repeat(dx, n)
+        u += np.repeat(ox, n)
+        w = steps * np.repeat(dy, n)
+        w += np.repeat(oy, n)
+        flat = w.astype(np.int64)  # in the grid: truncation is floor
+        flat *= self.W
+        flat += u.astype(np.int64)
+        flat += np.repeat(self.run_of[gm] * self.WH, n)
+        nonempty = n > 0  # pieces without points would share a first index
+        return Points(gm[nonempty], s0[nonempty], first[nonempty], steps_i, flat)
+
+    def _snapshot(self, g: I64) -> list[NDArray[np.generic]]:
+        return [a[g].copy() for a in self._state()]
+
+    def _restore(self, g: I64, saved: list[NDArray[np.generic]], mask: Bool) -> None:
+        for array, values in zip(self._state(), saved, strict=True):
+            array[g[mask]] = values[mask]
+
+    def _state(self) -> list[NDArray[np.generic]]:
+        return [self.body, self.s0, self.seg_end, self.stream]
+
+    # --- one round
+
+    def advance(self, now: I64, horizon: I64) -> tuple[I64, list[tuple[int, int, int, int]]]:
+        """Move every covering member of run r from tick now[r] to horizon[r], or only to the
+        first tick at which one of them (detecting) has an unfound target in view. Returns that
+        end tick per run and the finds there: (run, member, x patch, y patch), member order."""
+        end = horizon.copy()
+        movers = np.flatnonzero(self.moving)
+        runs = self.run_of[movers]
+        live = horizon[runs] > now[runs]
+        movers, runs = movers[live], runs[live]
+        if not movers.size:
+            return end, []
+        watch = (self.detecting | self.reports) & (self.unfound[self.run_of] > 0)
+        watching = bool(watch[movers].any())
+        saved = self._snapshot(movers) if watching else []
+        points = self._pieces(movers, now[runs], horizon[runs])
+        finds: list[tuple[int, int, int, int]] = []
+        if len(points) and watching:
+            hit = np.flatnonzero(self.near[points.flat] > 0)
+            hit = hit[watch[points.members(hit)]]
+            if hit.size:
+                hit_runs = points.flat[hit] // self.WH
+                hit_ticks = points.ticks(hit)
+                np.minimum.at(end, hit_runs, hit_ticks)
+                at = hit[hit_ticks == end[hit_runs]]
+                for i in at[np.argsort(points.members(at), kind="stable")]:
+                    run, rest = divmod(int(points.flat[i]), self.WH)
+                    iy, ix = divmod(rest, self.W)
+                    finds.append((run, int(points.members(np.array([i]))[0]), ix, iy))
+                cut = end[runs] < horizon[runs]
+                if cut.any():  # replay those runs' members up to the find (same draws)
+                    self._restore(movers, saved, cut)
+                    self._pieces(movers[cut], now[runs[cut]], end[runs[cut]], False)
+                    points = points.until(end, self.WH)
+        self._commit(points)
+        return end, finds
+
+    # --- coverage and targets
+
+    def _commit(self, points: Points) -> None:
+        """Record the patches members stood on. Rounds go forward in time per run, so only
+        patches never stood on before can change; the patches they bring into view are counted
+        (`covered`); *when* each patch was first seen is derived at the end (`seen_times`)."""
+        if not len(points):
+            return
+        new = np.flatnonzero(self.stood[points.flat] == 0)
+        if not new.size:
+            return
+        flat = points.flat[new]
+        np.minimum.at(self.first, flat, points.ticks(new).astype(np.int32))
+        centres = _distinct(flat, self._stamp_first)
+        self.stood[centres] = 1
+        run, rest = np.divmod(centres, self.WH)
+        y, x = np.divmod(rest, self.W)
+        padded = (run * self.PH + y + self.v) * self.PW + x + self.v
+        around = (padded[:, None] + self._view_offsets[None, :]).reshape(-1)
+        around = around[self.seen_flag[around] == 0]
+        fresh = _distinct(around, self._stamp_seen)
+        self.seen_flag[fresh] = 1
+        self.covered += np.bincount(fresh // self.PWH, minlength=self.runs)
+
+    def _near_add(self, run: int, target: int, delta: int) -> None:
+        v = self.v
+        x, y = int(self.tx[run, target]), int(self.ty[run, target])
+        grid = self.near.reshape(self.runs, self.H, self.W)
+        rows = slice(max(0, y - v), min(self.H, y + v + 1))
+        grid[run, rows, max(0, x - v) : min(self.W, x + v + 1)] += delta
+
+    def targets_in_view(self, member: int, ix: int, iy: int) -> list[int]:
+        run = int(self.run_of[member])
+        near = (
+            (np.abs(self.tx[run] - ix) <= self.v)
+            & (np.abs(self.ty[run] - iy) <= self.v)
+            & (self.status[run] == UNFOUND)
+        )
+        return [int(t) for t in np.flatnonzero(near)]
+
+    def report(self, run: int, target: int, member: int, tick: int) -> None:
+        """A member reported a target (targetFound): nobody else will find it now."""
+        if self.status[run, target] == UNFOUND:
+            self._near_add(run, target, -1)
+            self.unfound[run] -= 1
+        self.status[run, target] = FOUND
+        self.finder[run, target] = member
+        self.reported_tick[run, target] = tick
+        self.fresh[run].append(target)
+
+    def claim(self, run: int, target: int) -> None:
+        """The finder took the find up (a behaviour of it started on this target)."""
+        if self.status[run, target] == FOUND:
+            self.status[run, target] = CLAIMED
+            if self.found_tick[run, target] < 0:
+                self.found_tick[run, target] = self.reported_tick[run, target]
+
+    def forget(self, run: int, target: int) -> None:
+        """A find nobody took up: the target can be found again."""
+        if self.status[run, target] in (FOUND, CLAIMED):
+            self.status[run, target] = UNFOUND
+            self.finder[run, target] = -1
+            self._near_add(run, target, 1)
+            self.unfound[run] += 1
+
+    def rescue(self, run: int, target: int, tick: int) -> None:
+        if self.status[run, target] == RESCUED:
+            return
+        if self.status[run, target] == UNFOUND:
+            self._near_add(run, target, -1)
+            self.unfound[run] -= 1
+        if self.found_tick[run, target] < 0:
+            self.found_tick[run, target] = max(self.reported_tick[run, target], tick)
+        self.status[run, target] = RESCUED
+        self.rescued_tick[run, target] = tick
+
+    def seen_times(self, run: int) -> NDArray[np.int32]:
+        """When each patch of a run was first seen (INF: never), as a (height, width) grid: the
+        minimum of `first` over the view around each patch."""
+        v = self.v
+        first = self.first.reshape(self.runs, self.H, self.W)[run]
+        padded = np.full((self.PH, self.PW), INF, dtype=np.int32)
+        padded[v : v + self.H, v : v + self.W] = first
+        seen = np.full((self.H, self.W), INF, dtype=np.int32)
+        for oy in range(2 * v + 1):
+            for ox in range(2 * v + 1):
+                np.minimum(seen, padded[oy : oy + self.H, ox : ox + self.W], out=seen)
+        return seen
