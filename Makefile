@@ -58,7 +58,7 @@ lint: $(STAMP)
 	$(BIN)/ruff check swarmgen tests $(wildcard benchmarks)
 	$(BIN)/ruff format --check swarmgen tests $(wildcard benchmarks)
 
-typecheck: $(STAMP)
+typecheck: $(STAMP) $(ROS_STAMP)  # rclpy typed: the ROS runtime subclasses its Node
 	$(BIN)/mypy
 
 pytest: $(STAMP) $(ROS_STAMP) sysdeps
