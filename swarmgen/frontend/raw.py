@@ -19,12 +19,26 @@ class RawElement:
     uml_type: str  # State, Transition, ... ('' when unknown)
     id: str | None
     attrs: dict[str, str]  # by local name, without the xmi: bookkeeping attributes
-    span: Span
+    file: str
+    line: int
+    col: int
+    path: str  # `Model::Package::Class::Machine::State`
     text: str = ""  # stripped text content (bodies, languages)
     children: list[RawElement] = field(default_factory=list)
     parent: RawElement | None = None
     # References given as child elements: feature -> ids (xmi:idref) or hrefs (file#id, pathmap://...).
     child_refs: dict[str, list[str]] = field(default_factory=dict)
+
+    _span: Span | None = None
+
+    @property
+    def span(self) -> Span:
+        """Built on first use: most raw elements never need one."""
+        if self._span is None:
+            self._span = Span.model_construct(
+                file=self.file, line=self.line, col=self.col, xmi_id=self.id, path=self.path
+            )
+        return self._span
 
     @property
     def name(self) -> str:

@@ -258,7 +258,7 @@ def _convert(
             if _is_reference(child):
                 raw.child_refs.setdefault(etree.QName(child).localname, []).append(_ref_of(child))
                 continue
-            kid = _make_element(child, raw, raw.span.path, ctx, level + 1)
+            kid = _make_element(child, raw, raw.path, ctx, level + 1)
             raw.children.append(kid)
             pending.append((child, kid, level + 1))
         stack.extend(reversed(pending))
@@ -295,11 +295,12 @@ def _make_element(
     uml_type = _infer_type(feature, xmi_type, qname.namespace or "", attrs)
     name = attrs.get("name", "")
     path = f"{parent_path}::{name}" if parent_path and name else (name or parent_path)
-    span = Span(
-        file=ctx.file, line=line, col=_column(node, line, ctx), xmi_id=xmi_id or None, path=path
-    )
     text = (node.text or "").strip() if len(node) == 0 else ""
-    element = RawElement(feature, uml_type, xmi_id or None, attrs, span, text, parent=parent)
+    column = _column(node, line, ctx)
+    element = RawElement(
+        feature, uml_type, xmi_id or None, attrs, ctx.file, line, column, path, text
+    )
+    element.parent = parent
     if xmi_id:
         _register(element, ctx)
     return element

@@ -30,8 +30,24 @@ class Placed:
     parent: State | None  # None at a machine's top level
 
 
-def walk(machine: Machine) -> Iterator[Placed]:
-    """Every vertex of the machine (not of its submachines), parents before children."""
+_WALKS: dict[int, tuple[Machine, list[Placed]]] = {}
+
+
+def walk(machine: Machine) -> list[Placed]:
+    """Every vertex of the machine (not of its submachines), parents before children.
+
+    Memoised by identity (the IR is immutable): every check walks every machine."""
+    cached = _WALKS.get(id(machine))
+    if cached is not None and cached[0] is machine:
+        return cached[1]
+    if len(_WALKS) > 256:
+        _WALKS.clear()
+    placed = list(_walk_machine(machine))
+    _WALKS[id(machine)] = (machine, placed)
+    return placed
+
+
+def _walk_machine(machine: Machine) -> Iterator[Placed]:
     for point in machine.connection_points:
         yield Placed(point, None, None)
     for region in machine.regions:
@@ -49,9 +65,34 @@ def _walk_region(region: Region, parent: State | None) -> Iterator[Placed]:
 
 
 class ModelIndex:
-    """Lookups by id, built once per model."""
+    """Lookups by id, built once per model (`ModelIndex(model)` returns the cached index of the
+    last model it was asked for: every check shares it)."""
+
+    _last: ModelIndex | None = None
+
+    def __new__(cls, model: Model) -> ModelIndex:
+        last = cls._last
+        if last is not None and last.model is model:
+            return last
+        index = super().__new__(cls)
+        index._setup(model)
+        cls._last = index
+        return index
 
     def __init__(self, model: Model) -> None:
+        pass  # see _setup: __new__ returns a cached index
+
+    def placed(self, machine: Machine) -> list[Placed]:
+        """`walk(machine)`, computed once per machine."""
+        found = self._placed.get(machine.id)
+        if found is None or found[0] is not machine:
+            found = (machine, walk(machine))
+            self._placed[machine.id] = found
+        return found[1]
+
+    def _setup(self, model: Model) -> None:
+        self._placed: dict[str, tuple[Machine, list[Placed]]] = {}
+        self._submachines: dict[str, list[str]] = {}
         self.model = model
         self.machines: dict[str, Machine] = {m.id: m for m in model.machines}
         self.behaviours: dict[str, Behaviour] = {b.id: b for b in model.behaviours}
@@ -61,11 +102,15 @@ class ModelIndex:
             self.events_by_name.setdefault(event.name, event)
 
     def submachines(self, machine: Machine) -> list[str]:
-        return [
-            p.vertex.submachine
-            for p in walk(machine)
-            if isinstance(p.vertex, State) and p.vertex.submachine
-        ]
+        found = self._submachines.get(machine.id)
+        if found is None:
+            found = [
+                p.vertex.submachine
+                for p in self.placed(machine)
+                if isinstance(p.vertex, State) and p.vertex.submachine
+            ]
+            self._submachines[machine.id] = found
+        return found
 
     def reachable_machines(self, root: Machine) -> list[Machine]:
         """The machine and every machine it uses as a submachine, transitively, cycle-safe."""
