@@ -6,8 +6,8 @@ never as an XML element, never in CMake, never as a file outside the output dire
 from __future__ import annotations
 
 import ast
-import re
 import io
+import re
 import tokenize
 from pathlib import Path
 
