@@ -1,6 +1,6 @@
 """`python -m swarmgen`."""
 
-from swarmgen.cli import main
+from swarmgen.cli import run
 
 if __name__ == "__main__":
-    main()
+    run()

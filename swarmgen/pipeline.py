@@ -97,8 +97,9 @@ def _compile(path: Path, backends: Sequence[str] | None) -> Compilation:
         if backends is None or name in backends:
             for relative, text in backend.render(validation.model, charts).items():
                 files[PurePosixPath(name) / relative] = text
-    for relative, text in graph.files(validation.model, "mermaid").items():
-        files[PurePosixPath("diagrams") / relative] = text
+    if backends is None or "diagrams" in backends:
+        for relative, text in graph.files(validation.model, "mermaid").items():
+            files[PurePosixPath("diagrams") / relative] = text
     files[PurePosixPath("README.md")] = _output_readme(validation.model, path, documents)
     files[PurePosixPath(MANIFEST)] = _manifest(path, files)
     return Compilation(validation, files)

@@ -63,8 +63,22 @@ Instance = tuple[str, ...]  # ids of the submachine states that lead to a machin
 Key = tuple[Instance, str]  # one copy of one vertex
 
 
+_LAST: list[tuple[Model, tuple[c.Chart, ...]]] = []
+
+
 def lower(model: Model) -> tuple[c.Chart, ...]:
-    """One chart per member type with a machine, then one per remaining top-level machine."""
+    """One chart per member type with a machine, then one per remaining top-level machine.
+
+    Memoised for the last model (the IR is immutable): the data-flow check and the outputs
+    lower the same model."""
+    if _LAST and _LAST[0][0] is model:
+        return _LAST[0][1]
+    charts = _lower(model)
+    _LAST[:] = [(model, charts)]
+    return charts
+
+
+def _lower(model: Model) -> tuple[c.Chart, ...]:
     index = ModelIndex(model)
     names = IdAllocator()
     charts: list[c.Chart] = []

@@ -16,6 +16,11 @@ due, and advances time in rounds:
 Repetitions of one configuration share a batch (the leading axis of every world array);
 configurations and chunks of repetitions are spread over processes. A run's random numbers
 depend only on (seed, configuration, repetition), so results do not depend on `--workers`.
+
+With `record` (`swarmgen simulate --record DIR`), each run writes a ROS 2 bag,
+`DIR/<configuration>-<rep>` (see `Config.slug`), in the process that simulates it: every event
+every member processes and every change of its active states, stamped with the run's tick
+(`tick * tick_ms` ms since the start, launch being tick 0 in the shipped scenarios).
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -40,6 +45,9 @@ from swarmgen.runtime.member import Behaviour, InMemoryBus, Member, Request
 from swarmgen.sim.library import Activation, Library, SimBehaviour, claims, found
 from swarmgen.sim.scenario import Scenario
 from swarmgen.sim.world import FOUND, INF, RESCUED, Geometry, World, fan_headings, south_line
+
+if TYPE_CHECKING:
+    from swarmgen.trace.bag import BagRecorder
 
 POINTS_PER_ROUND = 1_000_000  # positions computed per round at most (memory bound)
 MIN_CHUNK = 256
@@ -212,6 +220,10 @@ class Config:
         parts = [f"{k}={v}" for k, v in self.counts]
         return " ".join([*parts, f"targets={self.targets}"])
 
+    def slug(self) -> str:
+        """A directory name: `UAV2_UGV2_targets4`."""
+        return "_".join([*(f"{k}{v}" for k, v in self.counts), f"targets{self.targets}"])
+
     def seed_key(self) -> list[int]:
         return [self.targets, *(count for _, count in self.counts)]
 
@@ -237,9 +249,19 @@ class Batch:
     """Repetitions of one configuration, simulated together; the engines' host."""
 
     def __init__(
-        self, machines: Machines, scenario: Scenario, config: Config, reps: Sequence[int]
+        self,
+        machines: Machines,
+        scenario: Scenario,
+        config: Config,
+        reps: Sequence[int],
+        *,
+        record: Path | None = None,
+        storage: str = "mcap",
     ) -> None:
         self.scenario = scenario
+        self.record = record  # a directory: one bag per run, written by `run_all`
+        self.storage = storage
+        self.recorders: list[BagRecorder] = []
         self.config = config
         self.reps = list(reps)
         runs = len(self.reps)
@@ -414,9 +436,25 @@ class Batch:
     # --- time
 
     def run_all(self) -> list[RunResult]:
+        if self.record is None:
+            return self._run_all()
+        from swarmgen.trace.bag import BagRecorder, VirtualClock
+
+        try:
+            for rep in self.reps:
+                path = self.record / f"{self.config.slug()}-{rep:04d}"
+                self.recorders.append(BagRecorder(path, storage=self.storage, clock=VirtualClock()))
+            return self._run_all()
+        finally:
+            for recorder in self.recorders:
+                recorder.close()
+
+    def _run_all(self) -> list[RunResult]:
         runs = len(self.reps)
         for member in self.members:
             member.engine.start()
+            if self.recorders:
+                self.recorders[member.rank].step(member, None, stamp_ns=0)
         for run in range(runs):
             self._drain(run)
         active = list(range(runs))
@@ -468,10 +506,14 @@ class Batch:
 
     def _drain(self, run: int) -> None:
         queue = self.pending[run]
+        recorder = self.recorders[run] if self.recorders else None
         count = 0
         while queue:
             member, event = queue.popleft()
             member.engine.send(event)
+            if recorder is not None:
+                stamp = self.t[run] * self.scenario.timing["tick_ms"] * 1_000_000
+                recorder.step(member, event, stamp_ns=stamp)
             count += 1
             if count > EVENTS_PER_TICK:
                 raise SimulationError(
@@ -574,9 +616,15 @@ def configurations(machines: Machines, scenario: Scenario) -> list[Config]:
 
 
 def _job(
-    machines: Machines, scenario: Scenario, config: Config, index: int, reps: list[int]
+    machines: Machines,
+    scenario: Scenario,
+    config: Config,
+    index: int,
+    reps: list[int],
+    record: Path | None = None,
+    storage: str = "mcap",
 ) -> list[RunResult]:
-    results = Batch(machines, scenario, config, reps).run_all()
+    results = Batch(machines, scenario, config, reps, record=record, storage=storage).run_all()
     for result in results:
         result.config = index
     return results
@@ -601,8 +649,11 @@ def simulate(
     scenario: Scenario,
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
+    record: Path | None = None,
+    storage: str = "mcap",
 ) -> Simulation:
-    """Run every configuration `scenario.reps` times; `progress(done, total)` after each batch."""
+    """Run every configuration `scenario.reps` times; `progress(done, total)` after each batch.
+    `record`: a new directory to write one bag per run into (`storage`: mcap or sqlite3)."""
     configs = configurations(machines, scenario)
     parts = max(1, math.ceil(workers / len(configs))) if workers > 1 else 1
     jobs = [(i, chunk) for i, _ in enumerate(configs) for chunk in _chunks(scenario.reps, parts)]
@@ -613,7 +664,7 @@ def simulate(
         progress(0, total)
     if workers <= 1 or len(jobs) == 1:
         for index, reps in jobs:
-            results += _job(machines, scenario, configs[index], index, reps)
+            results += _job(machines, scenario, configs[index], index, reps, record, storage)
             done += len(reps)
             if progress is not None:
                 progress(done, total)
@@ -622,7 +673,9 @@ def simulate(
         context = multiprocessing.get_context("fork" if "fork" in methods else None)
         with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
             futures = {
-                pool.submit(_job, machines, scenario, configs[index], index, reps): len(reps)
+                pool.submit(
+                    _job, machines, scenario, configs[index], index, reps, record, storage
+                ): len(reps)
                 for index, reps in jobs
             }
             for future in as_completed(futures):
@@ -710,10 +763,15 @@ def simulate_model(
     out_dir: Path | None,
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
+    record: Path | None = None,
+    storage: str = "mcap",
 ) -> tuple[Simulation, dict[str, bytes]]:
-    """`swarmgen simulate`: compile MODEL, run the scenario's sweep, write the results."""
+    """`swarmgen simulate`: compile MODEL, run the scenario's sweep, write the results (and with
+    `record`, one bag per run into that new directory)."""
     machines = compile_machines(model)
-    sim = simulate(machines, scenario, workers=workers, progress=progress)
+    sim = simulate(
+        machines, scenario, workers=workers, progress=progress, record=record, storage=storage
+    )
     files = outputs(sim)
     if out_dir is not None:
         write_outputs(files, out_dir)
