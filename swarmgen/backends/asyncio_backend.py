@@ -87,19 +87,31 @@ class AsyncioBackend:
                 composition=repr(composition),
             )
         )
-        files[package / "__main__.py"] = format_python(
-            render("asyncio/main.py.j2", **common, package=str(package))
-        )
-        files[package / "behaviours.py"] = format_python(
-            render(
-                "asyncio/behaviours.py.j2",
-                **common,
-                signatures=signatures(charts),
-                scripts=default_scripts(charts),
-            )
-        )
-        files.update(runtime_files(package / "_runtime", RUNTIME_MODULES))
+        files.update(support_files("asyncio", package, common, charts, RUNTIME_MODULES))
         return files
+
+
+def support_files(
+    templates: str,
+    package: PurePosixPath,
+    common: dict[str, str],
+    charts: tuple[Chart, ...],
+    runtime_modules: tuple[str, ...],
+) -> Files:
+    """`__main__.py`, the simulated behaviours and the vendored runtime: what every Python
+    package backend ships beside its member modules (from its own templates)."""
+    main = render(f"{templates}/main.py.j2", **common, package=str(package))
+    behaviours = render(
+        f"{templates}/behaviours.py.j2",
+        **common,
+        signatures=signatures(charts),
+        scripts=default_scripts(charts),
+    )
+    return {
+        package / "__main__.py": format_python(main),
+        package / "behaviours.py": format_python(behaviours),
+        **runtime_files(package / "_runtime", runtime_modules),
+    }
 
 
 def render_member(chart: Chart, common: dict[str, str]) -> str:

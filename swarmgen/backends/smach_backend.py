@@ -14,13 +14,11 @@ from swarmgen import __version__
 from swarmgen.backends import Files
 from swarmgen.backends.asyncio_backend import (
     RUNTIME_MODULES,
-    default_scripts,
     member_modules,
     package_name,
-    signatures,
+    support_files,
 )
 from swarmgen.backends.pyrender import ChartRenderer, Function, format_python, py_literal
-from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart import model as c
 from swarmgen.chart.model import Chart
 from swarmgen.ir import expr
@@ -375,18 +373,7 @@ class SmachBackend:
                 exports=repr(["COMPOSITION", "MEMBER_TYPES", *sorted(modules.values())]),
             )
         )
-        files[package / "__main__.py"] = format_python(
-            render("smach/main.py.j2", **common, package=str(package))
-        )
-        files[package / "behaviours.py"] = format_python(
-            render(
-                "smach/behaviours.py.j2",
-                **common,
-                signatures=signatures(charts),
-                scripts=default_scripts(charts),
-            )
-        )
-        files.update(runtime_files(package / "_runtime", SMACH_RUNTIME))
+        files.update(support_files("smach", package, common, charts, SMACH_RUNTIME))
         return files
 
 
