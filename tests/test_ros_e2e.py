@@ -24,6 +24,7 @@ import pytest
 from swarmgen import pipeline
 from swarmgen.backends.rclpy_backend import interfaces_package, nodes_package
 from swarmgen.ros import harness
+from swarmgen.trace.bag import read_events
 from tests.conftest import ROOT
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
@@ -43,6 +44,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 interfaces, mode, limit = sys.argv[1], sys.argv[2], float(sys.argv[3])
 members, finals = json.loads(sys.argv[4]), json.loads(sys.argv[5])
+bag = sys.argv[6] if len(sys.argv) > 6 else ""
 msg = __import__(f"{interfaces}.msg", fromlist=["Event", "ActiveStates"])
 EVENTS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 STATES = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
@@ -72,6 +74,13 @@ for member in members:
     node.create_subscription(msg.ActiveStates, f"/{member}/active_states", on_states, STATES)
 publisher = node.create_publisher(msg.Event, "/swarm/events", EVENTS)
 ids = iter(range(1, 1000))
+recorder = None
+if bag:  # the live recorder of swarmgen.trace: raw subscriptions, bytes into the bag
+    from swarmgen.trace.bag import BagRecorder
+    from swarmgen.trace.live import LiveRecorder
+
+    recorder = BagRecorder(bag, package=interfaces)
+    live = LiveRecorder(node, recorder, interfaces, members, discover=False)
 
 
 def publish(name):
@@ -121,6 +130,9 @@ except TimeoutError as err:
     result["error"] = str(err)
 finally:
     result.update(events=events, states=states, published=log, history=history)
+    if recorder is not None:
+        executor.spin_once(timeout_sec=0.2)  # the last messages reach the raw subscriptions too
+        recorder.close()
     print(json.dumps(result), flush=True)
     executor.shutdown()
     node.destroy_node()
@@ -205,7 +217,7 @@ def test_sar_swarm_rescues_and_stops_on_real_dds(sar: dict[str, Any], tmp_path: 
     station = _run(
         [
             sys.executable, str(station_py), sar["interfaces"], "mission", "30",
-            json.dumps(members), json.dumps(["Landed", "Stopped"]),
+            json.dumps(members), json.dumps(["Landed", "Stopped"]), str(tmp_path / "bag"),
         ],
         env, tmp_path, 60,
     )  # fmt: skip
@@ -253,6 +265,14 @@ def test_sar_swarm_rescues_and_stops_on_real_dds(sar: dict[str, Any], tmp_path: 
     assert events.index(found[0]) < events.index(assigned[0]) < events.index(rescued)
     assert seen["states"]["uav_1"] == ["Landed"] and seen["states"]["ugv_2"] == ["Stopped"]
     assert elapsed < 45, elapsed
+
+    # the run's bag, recorded live: read with swarmgen.trace (rosbags)
+    (run,) = read_events([tmp_path / "bag"])
+    recorded = [e.name for e in run.events]
+    story = ["launch", "missionStart", "targetFound", "targetAssigned", "targetRescued"]
+    firsts = [recorded.index(name) for name in story]
+    assert firsts == sorted(firsts), recorded
+    assert {c.member for c in run.states} >= {"uav_1", "ugv_1"}
 
 
 MEMBER_CHECK_SCRIPT = {

@@ -293,3 +293,57 @@ def test_confidence_intervals() -> None:
     assert e.half == pytest.approx(4.302653 * 1.0 / 3**0.5)
     assert kth([5, None, 3, 9], 0.0, 4) == 3 and kth([5, None, 3, 9], 0.75, 4) == 9
     assert kth([5, None, 3, 9], 1.0, 4) is None
+
+
+def test_cli_records_one_bag_per_run(tmp_path: Path) -> None:
+    """`--record DIR`: one bag per run, read back by rosbags alone, the same bytes whatever the
+    workers; `swarmgen timeline` over them has launch first, and in every run the first
+    targetFound comes before the first targetRescued."""
+    pytest.importorskip("rosbags", reason="rosbags comes with the `ros` extra: run `make ros`")
+    from swarmgen.trace.bag import read_events
+    from tests.conftest import run_cli
+    from tests.test_trace import read_with_rosbags_only
+
+    args = ["simulate", str(SAR), "--scenario", "sar", "--members", "UAV=1,2", "--targets", "2"]
+    args += ["--reps", "2", "--seed", "4"]
+    bags = {}
+    for workers in ("1", "3"):
+        record = tmp_path / f"bags{workers}"
+        result = CliRunner().invoke(main, [*args, "--workers", workers, "--record", str(record)])
+        assert result.exit_code == 0, result.output
+        assert f"recorded 4 run(s) into {record} (mcap)" in result.output
+        bags[workers] = {p.relative_to(record): p.read_bytes() for p in record.rglob("*.mcap")}
+    assert bags["1"] == bags["3"]  # deterministic, independent of the workers
+    record = tmp_path / "bags1"
+    names = sorted(p.name for p in record.iterdir())
+    assert names == [f"UAV{n}_UGV{n}_targets2-{r:04d}" for n in (1, 2) for r in (0, 1)]
+
+    content = read_with_rosbags_only(*(record / n for n in names))
+    for bag in content.values():
+        messages = bag["messages"]
+        assert bag["types"]["/swarm/events"] == "swarmgen_msgs/msg/Event"
+        events = [m[2]["name"] for m in messages if m[0] == "/swarm/events"]
+        assert events[:2] == ["launch", "outcome.TakeOff.succeeded"]
+        assert {"UAV-1", "UGV-1"} <= {m[2]["member"] for m in messages if m[0] != "/swarm/events"}
+
+    runs = read_events([record])
+    assert len(runs) == 4
+    for run in runs:
+        found, rescued = run.first("targetFound"), run.first("targetRescued")
+        assert found is not None and rescued is not None  # stop = rescued: both occur
+        assert run.first("launch") == run.events[0] and run.events[0].stamp_ns == 0
+        assert found.stamp_ns <= rescued.stamp_ns
+        assert run.events.index(found) < run.events.index(rescued)
+        states = {s.member: s.states for s in run.states}
+        assert states["UAV-1"] and states["UGV-1"]
+
+    timeline = run_cli("timeline", str(record))
+    assert timeline.returncode == 0, timeline.stderr
+    rows = [line.split() for line in timeline.stdout.splitlines()[1:]]
+    order = [row[0] for row in rows]
+    assert order[0] == "launch" and rows[0][1] == "4/4"
+    assert order.index("missionStart") < order.index("targetFound") < order.index("targetRescued")
+    assert rows[order.index("missionStart")][3] == "10.000"  # tick 10, 1000 ms per tick
+
+    again = CliRunner().invoke(main, [*args, "--record", str(record)])
+    assert again.exit_code == 2 and "exists" in again.output
