@@ -267,15 +267,24 @@ def render_text(diagnostics: Sequence[Diagnostic], *, excerpt: bool = True) -> s
 
 
 def _render_one(d: Diagnostic, sources: dict[str, list[str] | None] | None) -> str:
-    lines = [f"{d.span.location()}: {d.level.value}: {d.message} [{d.code.id}]"]
+    lines = [f"{d.span.location()}: {d.level.value}: {_one_line(d.message)} [{d.code.id}]"]
     if d.span.path:
-        lines.append(f"  in: {d.span.path}")
+        lines.append(f"  in: {_one_line(d.span.path)}")
     if sources is not None and d.span.line > 0:
         lines.extend(_excerpt(d.span, sources))
-    lines.extend(f"  note: {n}" for n in d.notes)
+    lines.extend(f"  note: {_one_line(n)}" for n in d.notes)
     if d.hint:
-        lines.append(f"  hint: {d.hint}")
+        lines.append(f"  hint: {_one_line(d.hint)}")
     return "\n".join(lines) + "\n"
+
+
+def _one_line(text: str) -> str:
+    """Model names with line breaks must not break the one-line-per-finding format."""
+    if text.isprintable():
+        return text
+    return "".join(
+        ch if ch.isprintable() else ch.encode("unicode_escape").decode("ascii") for ch in text
+    )
 
 
 def _excerpt(span: Span, sources: dict[str, list[str] | None]) -> list[str]:

@@ -192,3 +192,22 @@ def test_strict_compile_writes_nothing(tmp_path: Path) -> None:
     result = run_cli("compile", sample, "-o", str(tmp_path / "out"), "--strict")
     assert result.returncode == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_text_diagnostics_stay_one_line_with_newlines_in_names(tmp_path: Path) -> None:
+    from tests.modelkit import ModelKit
+
+    kit = ModelKit("Multi\nLine")
+    kit.event("go\nnow", sender="station")
+    machine = kit.machine("M")
+    machine.initial("A\nB")
+    machine.state("A\nB")
+    machine.state("Stuck")
+    machine.transition("A\nB", "Stuck", "go\nnow")
+    kit.member("Bot", machine=machine)
+    path = tmp_path / "multi.xmi"
+    path.write_text(kit.xmi(), encoding="utf-8")
+    result = run_cli("validate", str(path))
+    findings = [line for line in result.stdout.splitlines() if not line.startswith(" ")]
+    assert findings and all(line.startswith(str(path)) for line in findings), result.stdout
+    assert "'Stuck'" in result.stdout and "\\n" in result.stdout
