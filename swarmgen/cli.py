@@ -77,6 +77,13 @@ FORMAT = click.option(
     help="How diagnostics are printed (SARIF 2.1.0 for code-scanning tools).",
 )
 STRICT = click.option("--strict", is_flag=True, help="Treat warnings as errors.")
+STORAGE = click.option(
+    "--storage",
+    type=click.Choice(["mcap", "sqlite3"]),
+    default="mcap",
+    show_default=True,
+    help="Bag storage for --record.",
+)
 DISABLE = click.option(
     "--disable",
     "disabled",
@@ -223,10 +230,7 @@ def schema(output: Path, check: bool) -> None:
     "--record", type=click.Path(path_type=Path),
     help="Also write the trace as a ROS 2 bag into this new directory (docs/trace.md).",
 )  # fmt: skip
-@click.option(
-    "--storage", type=click.Choice(["mcap", "sqlite3"]), default="mcap", show_default=True,
-    help="Bag storage for --record.",
-)  # fmt: skip
+@STORAGE
 @_guarded
 def replay(
     model: Path, member: str, scenario: Path, backend: str, record: Path | None, storage: str
@@ -393,10 +397,7 @@ def timeline(
     "--record", type=click.Path(path_type=Path),
     help="Also write one ROS 2 bag per run, DIR/<configuration>-<rep>, into this new directory.",
 )  # fmt: skip
-@click.option(
-    "--storage", type=click.Choice(["mcap", "sqlite3"]), default="mcap", show_default=True,
-    help="Bag storage for --record.",
-)  # fmt: skip
+@STORAGE
 @_guarded
 def simulate(
     model: Path,
