@@ -4,6 +4,7 @@ behaviours, and a vendored copy of the runtime."""
 from __future__ import annotations
 
 from pathlib import PurePosixPath
+from typing import Any
 
 from swarmgen import __version__
 from swarmgen.backends import Files
@@ -28,9 +29,11 @@ def member_modules(charts: tuple[Chart, ...]) -> dict[str, str]:
     return {chart.name: taken.claim(ros_name(chart.name)) for chart in charts}
 
 
-def default_scripts(charts: tuple[Chart, ...]) -> str:
-    """Simulated behaviours: those whose outcome no transition waits for run until preempted."""
-    scripts: dict[str, str] = {}
+def script_specs(charts: tuple[Chart, ...]) -> dict[str, dict[str, Any]]:
+    """Simulated behaviours, by name: those whose outcome a transition waits for succeed after
+    1 s with default outputs; the others run until preempted (monitors, positioning, ...).
+    Every Python backend renders these in its own form."""
+    scripts: dict[str, dict[str, Any]] = {}
     for chart in charts:
         nodes = chart.walk()
         waited = {
@@ -44,11 +47,25 @@ def default_scripts(charts: tuple[Chart, ...]) -> str:
                 e == f"outcome.{node.id}" or e.startswith(f"outcome.{node.id}.") for e in waited
             )
             if not ended:
-                scripts.setdefault(info.name, "Script(forever=True)")
+                scripts.setdefault(info.name, {"forever": True})
                 continue
             outputs = {name: _DEFAULTS.get(type_ or "") for name, type_ in info.outputs}
-            scripts[info.name] = f"Script(outcome='succeeded', duration=1.0, outputs={outputs!r})"
-    return "{" + ", ".join(f"{name!r}: {scripts[name]}" for name in sorted(scripts)) + "}"
+            scripts[info.name] = {"duration": 1.0, "outcome": "succeeded", "outputs": outputs}
+    return dict(sorted(scripts.items()))
+
+
+def default_scripts(charts: tuple[Chart, ...]) -> str:
+    """`script_specs` as a `{name: Script(...)}` literal for runtime/simulated.py."""
+    items = []
+    for name, spec in script_specs(charts).items():
+        if spec.get("forever"):
+            items.append(f"{name!r}: Script(forever=True)")
+        else:
+            items.append(
+                f"{name!r}: Script(outcome={spec['outcome']!r}, duration={spec['duration']!r}, "
+                f"outputs={spec['outputs']!r})"
+            )
+    return "{" + ", ".join(items) + "}"
 
 
 def signatures(charts: tuple[Chart, ...]) -> str:

@@ -30,6 +30,7 @@ from xml.sax.saxutils import escape
 
 from swarmgen import __version__
 from swarmgen.backends import Files
+from swarmgen.backends.asyncio_backend import script_specs
 from swarmgen.backends.pyrender import ChartRenderer, format_python, py_literal
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart.model import BehaviourInfo, Chart
@@ -57,7 +58,6 @@ _RESERVED_MODULES = (
     "behaviours", "launch_swarm", "simulated_behaviours", "help", "h", "script", "time_scale",
     "station", "duration", "no_simulation", "trace", "events", "server_timeout",
 )  # fmt: skip
-_OUTPUT_DEFAULTS: dict[str, Value] = {"Real": 0.0, "Integer": 0, "Boolean": False, "String": ""}
 # A relative ROS name: tokens of letters, digits and underscores (not leading digits), no `__`.
 _ROS_TOKEN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
@@ -281,30 +281,6 @@ def member_parameters(model: Model, chart: Chart, views: dict[str, BehaviourView
     return found
 
 
-def default_scripts(charts: tuple[Chart, ...]) -> dict[str, dict[str, Any]]:
-    """Simulated behaviours: those whose outcome a transition waits for succeed after 1 s with
-    default outputs; the others run until they are preempted (monitors, positioning, ...)."""
-    scripts: dict[str, dict[str, Any]] = {}
-    for chart in charts:
-        nodes = chart.walk()
-        waited = {
-            e for n in nodes for t in n.transitions for e in t.events if e.startswith("outcome.")
-        }
-        for node in nodes:
-            if node.call is None:
-                continue
-            info = next(b for b in chart.behaviours if b.name == node.call.behaviour)
-            ended = any(
-                e == f"outcome.{node.id}" or e.startswith(f"outcome.{node.id}.") for e in waited
-            )
-            if not ended:
-                scripts.setdefault(info.name, {"forever": True})
-                continue
-            outputs = {name: _OUTPUT_DEFAULTS.get(t or "") for name, t in info.outputs}
-            scripts[info.name] = {"duration": 1.0, "outcome": "succeeded", "outputs": outputs}
-    return dict(sorted(scripts.items()))
-
-
 class RclpyBackend:
     name = "rclpy"
 
@@ -370,7 +346,7 @@ class RclpyBackend:
             )
         )
         files[python / "behaviours.py"] = format_python(
-            render("rclpy/behaviours.py.j2", **view, scripts=repr(default_scripts(charts)))
+            render("rclpy/behaviours.py.j2", **view, scripts=repr(script_specs(charts)))
         )
         files[python / "launch_swarm.py"] = format_python(
             render(
