@@ -35,7 +35,7 @@ from swarmgen.backends.pyrender import ChartRenderer, format_python, py_literal
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.ir.nodes import Model, Value
-from swarmgen.names import IdAllocator, identifier, one_line, ros_name
+from swarmgen.names import IdAllocator, doc_text, identifier, one_line, ros_name
 from swarmgen.render import render
 from swarmgen.ros.interfaces import (
     ACTIVE_STATES_MSG,
@@ -320,7 +320,7 @@ class RclpyBackend:
         launch_file = f"{swarm}.launch.py"
         view = {
             **common,
-            "model": _doc(model.name),
+            "model": doc_text(model.name),
             "model_repr": repr(model.name),
             "package": package,
             "interfaces": interfaces,
@@ -430,8 +430,8 @@ def render_member(
     text = render(
         "rclpy/member.py.j2",
         **common,
-        what=_doc(what),
-        doc=_doc(f"Behaviour of {what} (state machine {chart.machine}) as a ROS 2 node."),
+        what=doc_text(what),
+        doc=doc_text(f"Behaviour of {what} (state machine {chart.machine}) as a ROS 2 node."),
         chart_name=repr(chart.name),
         member_type=repr(chart.member or chart.name),
         machine=repr(chart.machine),
@@ -464,11 +464,6 @@ def ros_runtime_files(folder: PurePosixPath) -> dict[PurePosixPath, str]:
         )
         files[folder / f"{module}.py"] = header + text
     return files
-
-
-def _doc(text: str) -> str:
-    """Model text inside a docstring or comment line: one line, no quotes or backslashes."""
-    return one_line(text).replace('"', "'").replace("\\", "/")
 
 
 def _md(text: str) -> str:

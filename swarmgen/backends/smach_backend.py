@@ -23,7 +23,7 @@ from swarmgen.chart import model as c
 from swarmgen.chart.model import Chart
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model
-from swarmgen.names import IdAllocator, identifier, one_line, ros_name
+from swarmgen.names import IdAllocator, doc_text, identifier, one_line, ros_name
 from swarmgen.render import render
 
 SMACH_RUNTIME = (*RUNTIME_MODULES, "smach")
@@ -328,11 +328,6 @@ class SmachRenderer(ChartRenderer):
         return "/" + "/".join(reversed(path))
 
 
-def _doc(text: str) -> str:
-    """Model text inside a generated docstring: one line, no quotes or backslashes."""
-    return one_line(text).replace('"', "'").replace("\\", "/")
-
-
 def _unwrap(text: str) -> str:
     """`(a < b)` -> `a < b`: the outer parentheses go when they enclose the whole expression
     (then the text without them is an expression too, token for token)."""
@@ -364,9 +359,9 @@ class SmachBackend:
             render(
                 "smach/package_init.py.j2",
                 **common,
-                model=_doc(model.name),
+                model=doc_text(model.name),
                 package=str(package),
-                first_member=_doc(next(iter(members), "")),
+                first_member=doc_text(next(iter(members), "")),
                 modules=sorted(modules.values()),
                 member_modules="{" + ", ".join(f"{k!r}: {v}" for k, v in members.items()) + "}",
                 composition=repr(composition),
@@ -385,8 +380,8 @@ def render_member(chart: Chart, common: dict[str, str]) -> str:
         "smach/member.py.j2",
         **common,
         what=one_line(what),
-        what_doc=_doc(what),
-        doc=_doc(f"Behaviour of {what} (state machine {chart.machine}), built with SMACH."),
+        what_doc=doc_text(what),
+        doc=doc_text(f"Behaviour of {what} (state machine {chart.machine}), built with SMACH."),
         chart_name=repr(chart.name),
         member_type=repr(chart.member),
         machine=repr(chart.machine),
