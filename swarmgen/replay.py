@@ -209,6 +209,6 @@ def _qt(arguments: list[str], document: Path) -> list[dict[str, Any]]:
     if completed.returncode != 0:
         raise ReplayError(f"Qt SCXML failed: {completed.stderr.strip().splitlines()[-1:]}")
     records = [json.loads(line) for line in completed.stdout.splitlines() if line.strip()]
-    if records and "errors" in records[0]:
+    if records and "step" not in records[0]:  # {"errors": [...]}: the document did not load
         raise ReplayError(f"Qt SCXML cannot load {document.name}: {records[0]['errors']}")
     return records

@@ -118,7 +118,7 @@ class ModelKit:
         self.members: dict[
             str, tuple[Machine | None, dict[str, tuple[str, int]], dict[str, tuple[str, object]]]
         ] = {}
-        self.swarms: dict[str, dict[str, int]] = {}
+        self.swarms: dict[str, list[tuple[str, str, int]]] = {}  # swarm -> (part, type, count)
         self.datatypes = {"Pose": {"x": "Real", "y": "Real"}}
 
     def hardware(
@@ -169,8 +169,13 @@ class ModelKit:
         normal = {k: (v if isinstance(v, tuple) else (v, 1)) for k, v in (parts or {}).items()}
         self.members[name] = (machine, normal, dict(data or {}))
 
-    def swarm(self, name: str, members: dict[str, int]) -> None:
-        self.swarms[name] = dict(members)
+    def swarm(self, name: str, members: dict[str, int] | list[tuple[str, str, int]]) -> None:
+        """A Swarm class: {member type: count} (one part per type, named `<type>s`), or
+        [(part name, member type, count), ...] for several parts of one type."""
+        if isinstance(members, dict):
+            self.swarms[name] = [(m.lower() + "s", m, n) for m, n in members.items()]
+        else:
+            self.swarms[name] = list(members)
 
     # --- writing
 
@@ -220,13 +225,13 @@ class ModelKit:
             stereos.append(
                 f'  <CPSwarm:SwarmMember xmi:id="{ids.new()}" base_Class="{ids["class:" + member]}"/>'
             )
-        for swarm, counts in self.swarms.items():
+        for swarm, swarm_parts in self.swarms.items():
             body.append(
                 f'    <packagedElement xmi:type="uml:Class" xmi:id="{ids["class:" + swarm]}" name={quoteattr(swarm)}>'
             )
-            for member, count in counts.items():
+            for part, member, count in swarm_parts:
                 body.append(
-                    f'      <ownedAttribute xmi:id="{ids.new()}" name={quoteattr(member.lower() + "s")} type="{ids["class:" + member]}" aggregation="composite">'
+                    f'      <ownedAttribute xmi:id="{ids.new()}" name={quoteattr(part)} type="{ids["class:" + member]}" aggregation="composite">'
                 )
                 body += _multiplicity(ids, count, "        ")
                 body.append("      </ownedAttribute>")

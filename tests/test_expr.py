@@ -414,10 +414,10 @@ def py_fields(e: Expr) -> str:
         ("x != null", "(x != null)", "(self.x != None)"),
         ("true", "true", "True"),
         ("False", "false", "False"),
-        ("event.speed > 2", "(_event.data.speed > 2)", "(event['speed'] > 2)"),
-        ("event.größe", '_event.data["gr\\u00f6\\u00dfe"]', "event['größe']"),
-        ("a % b", "(((a % b) + b) % b)", "(self.a % self.b)"),
-        ("a / 2", "(a / 2)", "(self.a / 2)"),
+        ("event.speed > 2", '($sg.field(_event, "speed") > 2)', "(event['speed'] > 2)"),
+        ("event.größe", '$sg.field(_event, "gr\\u00f6\\u00dfe")', "event['größe']"),
+        ("a % b", "$sg.mod(a, b)", "(self.a % self.b)"),
+        ("a / 2", "$sg.div(a, 2)", "(self.a / 2)"),
         ("-x", "(-x)", "(-self.x)"),
         ("-1", "(-1)", "(-1)"),
         ("-1.5", "(-1.5)", "(-1.5)"),
@@ -430,7 +430,7 @@ def py_fields(e: Expr) -> str:
         ("pos.x", "pos.x", "self.pos.x"),
         ("pos.class", "pos.class", "getattr(self.pos, 'class')"),
         ("pos.größe", 'pos["gr\\u00f6\\u00dfe"]', "getattr(self.pos, 'größe')"),
-        ("event.a.b", "_event.data.a.b", "event['a'].b"),
+        ("event.a.b", '$sg.field(_event, "a").b', "event['a'].b"),
         ("else", "true", "True"),
         ("(a < b) < c", "((a < b) < c)", "((self.a < self.b) < self.c)"),
     ],
@@ -445,7 +445,7 @@ def test_renderings(text: str, js: str, python: str) -> None:
 
 def test_name_callbacks() -> None:
     e = parse_expr("a + event.b")
-    assert to_ecmascript(e, name=lambda n: f"m_{n}") == "(m_a + _event.data.b)"
+    assert to_ecmascript(e, name=lambda n: f"m_{n}") == '(m_a + $sg.field(_event, "b"))'
     assert to_python(e, name=lambda n: f"m_{n}", event_field=lambda f: f"f_{f}") == "(m_a + f_b)"
 
 

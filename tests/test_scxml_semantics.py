@@ -1,6 +1,6 @@
 """The emitted SCXML behaves as the model says, run in an independent engine (Qt SCXML).
 
-Behaviour outcomes arrive as `outcome.<state>.<outcome>` events, as the swarmgen runtime sends
+Behaviour ends arrive as `done.invoke.<state>.<outcome>` events, as the swarmgen runtime sends
 them; swarm and station events arrive under their own names with their data.
 """
 
@@ -52,16 +52,19 @@ def test_sar_uav_mission(uav: Path) -> None:
         uav,
         [
             ("launch", None),
-            ("outcome.TakeOff.succeeded", None),
+            ("done.invoke.TakeOff.succeeded", None),
             ("missionStart", None),
-            ("outcome.Coverage.succeeded", None),  # Coverage leaves only on the targetFound event
+            (
+                "done.invoke.Coverage.succeeded",
+                None,
+            ),  # Coverage leaves only on the targetFound event
             ("targetFound", {"target_id": 7, "pose": {"x": 1.0, "y": 2.0, "z": 0.0}}),
-            ("outcome.SelectRover.succeeded", {"rover_id": 3}),
-            ("outcome.Coverage.succeeded", None),  # an outcome of another state is not ours
-            ("outcome.Tracking.targetLost", None),
-            ("outcome.LocalCoverage.succeeded", {"target_id": 8}),
+            ("done.invoke.SelectRover.succeeded", {"rover_id": 3}),
+            ("done.invoke.Coverage.succeeded", None),  # an outcome of another state is not ours
+            ("done.invoke.Tracking.targetLost", None),
+            ("done.invoke.LocalCoverage.succeeded", {"target_id": 8}),
             ("missionAbort", None),
-            ("outcome.Land.succeeded", None),
+            ("done.invoke.Land.succeeded", None),
         ],
     )
     leaves = [_leaves(r, UAV_LEAVES) for r in reports]
@@ -99,15 +102,24 @@ def test_patrol_guards_history_submachines_and_raise(tmp_path: Path, qt_availabl
         scout,
         [
             ("missionStart", None),
-            ("outcome.GetZone.succeeded", {"zone_id": 2, "zone_pose": {"x": 5}}),
-            ("outcome.GoToZone__Moving.aborted", None),  # choice: retries < max_retries -> retry
-            ("outcome.GoToZone__Moving.succeeded", None),  # final state -> completion -> Sweeping
+            ("done.invoke.GetZone.succeeded", {"zone_id": 2, "zone_pose": {"x": 5}}),
+            (
+                "done.invoke.GoToZone__Moving.aborted",
+                None,
+            ),  # choice: retries < max_retries -> retry
+            (
+                "done.invoke.GoToZone__Moving.succeeded",
+                None,
+            ),  # final state -> completion -> Sweeping
             ("intrusion", {"zone": 1, "pose": {"x": 9}}),  # guard: another zone, ignored
             ("intrusion", {"zone": 2, "pose": {"x": 9}}),
             ("batteryStatus", {"battery": 50.0}),  # guard false
             ("batteryStatus", {"battery": 10.0}),  # raise lowBattery -> GoToDock
-            ("outcome.GoToDock__Moving.succeeded", None),
-            ("outcome.Charging.succeeded", {"battery": 100.0}),  # deep history: back to Approach
+            ("done.invoke.GoToDock__Moving.succeeded", None),
+            (
+                "done.invoke.Charging.succeeded",
+                {"battery": 100.0},
+            ),  # deep history: back to Approach
             ("recall", None),
         ],
     )
@@ -127,7 +139,11 @@ def test_patrol_guards_history_submachines_and_raise(tmp_path: Path, qt_availabl
         {"Stopped"},
     ]
     data = [r["data"] for r in reports]
-    assert data[2]["goal_pose"] == {"x": 5} and data[3]["retries"] == 1 and data[4]["retries"] == 0
-    assert data[6]["alarm_raised"] is True and data[6]["intruder_pose"] == {"x": 9}
+    assert (
+        data[2]["goal_pose"] == {"x": 5, "y": 0, "z": 0}
+        and data[3]["retries"] == 1
+        and data[4]["retries"] == 0
+    )
+    assert data[6]["alarm_raised"] is True and data[6]["intruder_pose"] == {"x": 9, "y": 0, "z": 0}
     assert data[8]["low_battery"] is True and data[8]["battery"] == 10.0
     assert data[10]["low_battery"] is False and data[10]["battery"] == 100.0

@@ -323,7 +323,7 @@ def test_cli_records_one_bag_per_run(tmp_path: Path) -> None:
         messages = bag["messages"]
         assert bag["types"]["/swarm/events"] == "swarmgen_msgs/msg/Event"
         events = [m[2]["name"] for m in messages if m[0] == "/swarm/events"]
-        assert events[:2] == ["launch", "outcome.TakeOff.succeeded"]
+        assert events[:2] == ["launch", "done.invoke.TakeOff.succeeded"]
         assert {"UAV-1", "UGV-1"} <= {m[2]["member"] for m in messages if m[0] != "/swarm/events"}
 
     runs = read_events([record])

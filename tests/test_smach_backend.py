@@ -403,6 +403,7 @@ WORK_CALL = c.Call(
     "SwarmBehavior",
     (c.Arg("x", _name("x"), implicit=True), c.Arg("y", PLUS_ONE, implicit=False)),
     (("x", "b"), ("out", "out")),  # x is read from `x` but written to `b`: no one remapping
+    ("succeeded", "aborted", "go"),
 )
 
 
@@ -424,7 +425,7 @@ def synthetic_chart() -> c.Chart:
                 transitions=(
                     c.Transition(("outcome.R1a.succeeded",), ("R1done",)),
                     c.Transition(("outcome.R1a.go",), ("R1fail",)),
-                    c.Transition(("go",), ("R1b",), actions=(c.WriteBack("out", "out"),)),
+                    c.Transition(("go",), ("R1b",)),
                     c.Transition(("outcome.R1a.aborted", "tick"), ("R1b",)),
                 ),
             ),
@@ -518,7 +519,7 @@ def synthetic_chart() -> c.Chart:
         role=None,
         source="synth.xmi",
         data=tuple(
-            c.DataItem(name, name, "Integer", value)
+            c.DataItem(name, name, "Integer", value, value)
             for name, value in [("a", 1), ("b", 2), ("x", 5), ("out", 0), ("match", 0)]
         ),
         initial=("Start",),
@@ -578,7 +579,9 @@ def test_synthetic_chart_runs_like_the_asyncio_chart(
     theirs, ours = synthetic
     engine = importlib.import_module(f"{theirs.__name__.rpartition('.')[0]}._runtime.engine")
     events = ["after.Start.0", "go", "tick", "stop", "back", "jump", "next", "ping", "quit"]
-    events += [f"outcome.{s}.{o}" for s in ("R1a", "Box") for o in ("succeeded", "aborted", "go")]
+    events += [
+        f"done.invoke.{s}.{o}" for s in ("R1a", "Box") for o in ("succeeded", "aborted", "go")
+    ]
     rng = random.Random(7)
     for _ in range(30):
         runs = [engine.Engine(module.build()) for module in (theirs, ours)]
@@ -586,7 +589,7 @@ def test_synthetic_chart_runs_like_the_asyncio_chart(
             run.start()
         for _ in range(25):
             name = rng.choice(events)
-            data = {"out": rng.randint(0, 9)} if name.startswith("outcome.") else None
+            data = {"out": rng.randint(0, 9)} if name.startswith("done.invoke.") else None
             for run in runs:
                 run.send(run.make_event(name, data))
             left, right = runs

@@ -8,10 +8,11 @@ from typing import Any
 
 from swarmgen import __version__
 from swarmgen.backends import Files
-from swarmgen.backends.pyrender import ChartRenderer, format_python
+from swarmgen.backends.pyrender import ChartRenderer, event_fields_literal, format_python
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart.model import Chart
 from swarmgen.ir.nodes import Model
+from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import IdAllocator, doc_text, one_line, ros_name
 from swarmgen.render import render
 
@@ -91,7 +92,7 @@ class AsyncioBackend:
         for chart in charts:
             files[package / f"{modules[chart.name]}.py"] = render_member(chart, common)
         members = {c.member: modules[c.name] for c in charts if c.member}
-        composition = {p.type_name: p.count for s in model.swarms for p in s.members}
+        composition = swarm_composition(model)
         files[package / "__init__.py"] = format_python(
             render(
                 "asyncio/package_init.py.j2",
@@ -144,6 +145,7 @@ def render_member(chart: Chart, common: dict[str, str]) -> str:
         member_type=repr(chart.member),
         machine=repr(chart.machine),
         event_scopes=repr(scopes),
+        event_fields=event_fields_literal(chart),
         code=code,
     )
     return format_python(text)

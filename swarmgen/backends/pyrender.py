@@ -13,13 +13,13 @@ import os
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import black
 from black.mode import TargetVersion
 
 from swarmgen.chart import model as c
 from swarmgen.ir import expr
-from swarmgen.ir.nodes import Value
 from swarmgen.names import identifier
 
 BLACK_VERSION = importlib.metadata.version("black")
@@ -80,10 +80,19 @@ class ChartCode:
     data_literal: str = "{}"
 
 
-def py_literal(value: Value) -> str:
+def py_literal(value: Any) -> str:
+    """A JSON-like value (scalars, and dicts of them for data types) as Python source."""
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{str(k)!r}: {py_literal(v)}" for k, v in value.items()) + "}"
     if isinstance(value, float) and (value != value or value in {float("inf"), float("-inf")}):
         return "None"
     return repr(value)
+
+
+def event_fields_literal(chart: c.Chart) -> str:
+    """`EVENT_FIELDS` of a member module: each event's fields and their defaults."""
+    items = (f"{e.ident!r}: {py_literal(dict(e.defaults))}" for e in chart.events if e.defaults)
+    return "{" + ", ".join(items) + "}"
 
 
 class ChartRenderer:
@@ -96,7 +105,7 @@ class ChartRenderer:
         self._counter = 0
 
     def render(self) -> ChartCode:
-        items = ", ".join(f"{d.id!r}: {py_literal(d.default)}" for d in self.chart.data)
+        items = ", ".join(f"{d.id!r}: {py_literal(d.initial)}" for d in self.chart.data)
         self.code.data_literal = "{" + items + "}"
         for node in self.chart.children:
             self._node(node, None)
@@ -105,12 +114,14 @@ class ChartRenderer:
 
     # --- expressions
 
-    def py(self, e: expr.Expr) -> str:
+    def py(self, e: expr.Expr | c.FieldDefault) -> str:
+        if isinstance(e, c.FieldDefault):
+            return py_literal(e.value)
         return expr.to_python(
             e,
             name=lambda n: f"d[{(self.data_ids.get(n) or identifier(n))!r}]",
-            # a missing field reads as None, as `_event.data.f` reads undefined in SCXML
-            event_field=lambda f: f"ctx.event_data.get({identifier(f)!r})",
+            # a field the event does not carry is an error, as `$sg.field` in the SCXML
+            event_field=lambda f: f"ctx.field({identifier(f)!r})",
         )
 
     def _function(self, kind: str, body: list[str]) -> str:
@@ -135,8 +146,6 @@ class ChartRenderer:
     def _action_lines(self, action: c.Action) -> list[str]:
         if isinstance(action, c.Assign):
             return [f"d[{action.location!r}] = {self.py(action.value)}"]
-        if isinstance(action, c.WriteBack):
-            return [f"ctx.write_back({action.location!r}, {action.field!r})"]
         if isinstance(action, c.Raise | c.Send):
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
@@ -162,7 +171,8 @@ class ChartRenderer:
         if node.call is not None:
             call = node.call
             options.append(
-                f"call=Call({call.behaviour!r}, {call.kind!r}, {self._args(call)}, {tuple(call.results)!r})"
+                f"call=Call({call.behaviour!r}, {call.kind!r}, {self._args(call)}, "
+                f"{tuple(call.results)!r}, {tuple(call.outcomes)!r})"
             )
         if node.timers:
             options.append(f"timers={tuple((t.event, t.delay_ms) for t in node.timers)!r}")

@@ -31,10 +31,16 @@ from xml.sax.saxutils import escape
 from swarmgen import __version__
 from swarmgen.backends import Files
 from swarmgen.backends.asyncio_backend import script_specs
-from swarmgen.backends.pyrender import ChartRenderer, format_python, py_literal
+from swarmgen.backends.pyrender import (
+    ChartRenderer,
+    event_fields_literal,
+    format_python,
+    py_literal,
+)
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.ir.nodes import Model, Value
+from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import IdAllocator, doc_text, identifier, one_line, ros_name
 from swarmgen.render import render
 from swarmgen.ros.interfaces import (
@@ -221,7 +227,7 @@ def member_parameters(model: Model, chart: Chart, views: dict[str, BehaviourView
             _parameter(
                 name,
                 field_type(item.type),
-                item.default,
+                item.initial,
                 data=item.id,
                 description=f"member data {item.name} ({item.type or 'untyped'})",
             )
@@ -309,7 +315,7 @@ class RclpyBackend:
         python = root / package
         modules = member_modules(charts)
         members = {chart.member or chart.name: modules[chart.name] for chart in charts}
-        composition = {p.type_name: p.count for s in model.swarms for p in s.members}
+        composition = swarm_composition(model)
         composition = {kind: composition.get(kind, 1) for kind in members}
         swarm_counts = {c.name: composition[c.member or c.name] for c in charts}
         events: dict[str, tuple[str, str]] = {}
@@ -438,6 +444,7 @@ def render_member(
         node_name=repr(module),
         interfaces=repr(interfaces),
         event_scopes=repr(scopes),
+        event_fields=event_fields_literal(chart),
         behaviours="{" + ", ".join(f"{v.info.name!r}: {v.spec()}" for v in behaviours) + "}",
         parameters="(" + "".join(f"{p}, " for p in member_parameters(model, chart, views)) + ")",
         notes=[f"{one_line(v.info.name)}: {one_line(v.note)}" for v in behaviours if v.note],

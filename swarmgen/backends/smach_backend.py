@@ -18,11 +18,18 @@ from swarmgen.backends.asyncio_backend import (
     package_name,
     support_files,
 )
-from swarmgen.backends.pyrender import ChartRenderer, Function, format_python, py_literal
+from swarmgen.backends.pyrender import (
+    ChartRenderer,
+    Function,
+    event_fields_literal,
+    format_python,
+    py_literal,
+)
 from swarmgen.chart import model as c
 from swarmgen.chart.model import Chart
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model
+from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import IdAllocator, doc_text, identifier, one_line, ros_name
 from swarmgen.render import render
 
@@ -76,7 +83,7 @@ class SmachRenderer(ChartRenderer):
         finals = [n.id for n in self.chart.children if n.kind == "final"]
         top.lines.append(f"sm = smach.StateMachine(outcomes={finals!r})")
         for item in self.chart.data:
-            value = py_literal(item.default)
+            value = py_literal(item.initial)
             if item.id.isidentifier() and not keyword.iskeyword(item.id) and item.id[0] != "_":
                 top.lines.append(f"sm.userdata.{item.id} = {value}")
             else:
@@ -354,7 +361,7 @@ class SmachBackend:
         for chart in charts:
             files[package / f"{modules[chart.name]}.py"] = render_member(chart, common)
         members = {c.member: modules[c.name] for c in charts if c.member}
-        composition = {p.type_name: p.count for s in model.swarms for p in s.members}
+        composition = swarm_composition(model)
         files[package / "__init__.py"] = format_python(
             render(
                 "smach/package_init.py.j2",
@@ -386,6 +393,7 @@ def render_member(chart: Chart, common: dict[str, str]) -> str:
         member_type=repr(chart.member),
         machine=repr(chart.machine),
         event_scopes=repr(scopes),
+        event_fields=event_fields_literal(chart),
         code=code,
     )
     return format_python(text)

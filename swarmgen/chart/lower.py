@@ -19,6 +19,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from swarmgen.chart import model as c
+from swarmgen.chart import values
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import (
     Behaviour,
@@ -140,7 +141,7 @@ class _Lowering:
             role=member.role if member else None,
             source=self.index.model.source.replace("\\", "/").rsplit("/", 1)[-1],
             data=tuple(
-                c.DataItem(p.ident, p.name, p.type, p.default)
+                c.DataItem(p.ident, p.name, p.type, p.default, self._initial(p))
                 for p in sorted(self.data.values(), key=lambda p: p.name)
             ),
             initial=initial,
@@ -153,7 +154,20 @@ class _Lowering:
                 _behaviour_info(b)
                 for b in sorted(self.used_behaviours.values(), key=lambda b: b.name)
             ),
-            events=tuple(_event_info(e) for e in self._used_events()),
+            events=tuple(self._event_info(e) for e in self._used_events()),
+        )
+
+    def _initial(self, prop: Property) -> object:
+        return values.initial(prop, self.index.datatypes)
+
+    def _event_info(self, event: Event) -> c.EventInfo:
+        return c.EventInfo(
+            name=event.name,
+            ident=event.ident,
+            sender=event.sender,
+            scope=event.scope,
+            fields=tuple((f.ident, f.type) for f in event.fields),
+            defaults=tuple((f.ident, self._initial(f)) for f in event.fields),
         )
 
     def _collect_data(self) -> None:
@@ -418,7 +432,10 @@ class _Lowering:
             for prop in behaviour.outputs
             if prop.name in self.data
         )
-        return c.Call(behaviour.name, behaviour.ident, behaviour.kind.value, tuple(args), results)
+        outcomes = tuple(identifier(o) for o in behaviour.outcomes)
+        return c.Call(
+            behaviour.name, behaviour.ident, behaviour.kind.value, tuple(args), results, outcomes
+        )
 
     def _history(self, copy: _Copy, vertex: Pseudostate) -> c.Node:
         hid = self._id(copy.instance, vertex.id)
@@ -511,18 +528,33 @@ class _Lowering:
         ):
             return None  # stands on the sources' common ancestor (see _joins)
         internal_self = transition.kind == "internal" and transition.source == transition.target
+        events = self._events(transition, source, sid, copy)
+        outputs = self._outputs_read(source, sid, events)
         guard = transition.guard
+        if guard is not None and outputs:
+            guard = expr.replace_fields(guard, outputs)
         return c.Transition(
-            events=self._events(transition, source, sid, copy),
+            events=events,
             targets=() if internal_self else tuple(self._targets(copy, transition.target)),
             cond=None if guard is None or isinstance(guard, expr.Else) else guard,
             internal=transition.kind == "local",
-            actions=self._writeback(transition, source)
-            + self._actions(transition.effect, transition.opaque),
+            actions=self._actions(transition.effect, transition.opaque, outputs),
             name=transition.name
             if transition.name and not transition.name.startswith("Transition")
             else None,
         )
+
+    def _outputs_read(self, source: Vertex, sid: str, events: tuple[str, ...]) -> dict[str, str]:
+        """On a transition taken by the outcome of the source's behaviour, `event.<output>` is
+        the member datum the output was just written to (docs/semantics.md: the outcome event
+        itself carries no data, so that it stays an internal event in every engine)."""
+        if not isinstance(source, State) or source.activity is None:
+            return {}
+        prefix = f"outcome.{sid}"
+        if not any(e == prefix or e.startswith(prefix + ".") for e in events):
+            return {}
+        behaviour = self.index.behaviours[source.activity.behaviour]
+        return {p.name: p.name for p in behaviour.outputs if p.name in self.data}
 
     def _events(
         self, transition: Transition, source: Vertex, sid: str, copy: _Copy
@@ -550,25 +582,6 @@ class _Lowering:
             return "*"
         event = self.index.events.get(trigger.event or "")
         return event.ident if event is not None else identifier(trigger.name)
-
-    def _writeback(self, transition: Transition, source: Vertex) -> tuple[c.Action, ...]:
-        """Outputs of the behaviour, carried as the outcome event's data, become member data."""
-        if (
-            not isinstance(source, State)
-            or source.activity is None
-            or transition.source != source.id
-        ):
-            return ()
-        if transition.triggers and not any(
-            t.kind == TriggerKind.OUTCOME for t in transition.triggers
-        ):
-            return ()
-        behaviour = self.index.behaviours[source.activity.behaviour]
-        return tuple(
-            c.WriteBack(self.data[p.name].ident, p.ident)
-            for p in behaviour.outputs
-            if p.name in self.data
-        )
 
     def _joins(self, copy: _Copy, state: State) -> list[c.Transition]:
         found = []
@@ -645,20 +658,39 @@ class _Lowering:
         return event.ident if event is not None else identifier(name)
 
     def _actions(
-        self, actions: tuple[expr.Action, ...], opaque: tuple[OpaqueCode, ...]
+        self,
+        actions: tuple[expr.Action, ...],
+        opaque: tuple[OpaqueCode, ...],
+        outputs: dict[str, str] | None = None,
     ) -> tuple[c.Action, ...]:
         lowered: list[c.Action] = []
         for action in actions:
+            if outputs:
+                action = _read_outputs(action, outputs)
             if isinstance(action, expr.Assign):
                 lowered.append(c.Assign(self._data_ident(action.target), action.value))
                 continue
-            params = tuple(c.Param(identifier(a.name), a.value) for a in action.args)
+            params = self._params(action.event, action.args)
             if isinstance(action, expr.Raise):
                 lowered.append(c.Raise(self._event_ident(action.event), params))
             else:
                 lowered.append(c.Send(self._event_ident(action.event), params))
         lowered += [c.Opaque(code.language or "unspecified", code.body) for code in opaque]
         return tuple(lowered)
+
+    def _params(self, event_name: str, args: tuple[expr.Arg, ...]) -> tuple[c.Param, ...]:
+        """The effect's fields, then every declared field it leaves out with its default (the
+        value rule: an event always carries all its fields)."""
+        given = tuple(c.Param(identifier(a.name), a.value) for a in args)
+        event = self.index.events_by_name.get(event_name)
+        if event is None:
+            return given
+        named = {p.name for p in given}
+        return given + tuple(
+            c.Param(f.ident, c.FieldDefault(self._initial(f)))
+            for f in event.fields
+            if f.ident not in named
+        )
 
     def _used_events(self) -> list[Event]:
         names: set[str] = set()
@@ -690,14 +722,13 @@ def _behaviour_info(behaviour: Behaviour) -> c.BehaviourInfo:
     )
 
 
-def _event_info(event: Event) -> c.EventInfo:
-    return c.EventInfo(
-        name=event.name,
-        ident=event.ident,
-        sender=event.sender,
-        scope=event.scope,
-        fields=tuple((f.ident, f.type) for f in event.fields),
+def _read_outputs(action: expr.Action, outputs: dict[str, str]) -> expr.Action:
+    if isinstance(action, expr.Assign):
+        return action.model_copy(update={"value": expr.replace_fields(action.value, outputs)})
+    args = tuple(
+        a.model_copy(update={"value": expr.replace_fields(a.value, outputs)}) for a in action.args
     )
+    return action.model_copy(update={"args": args})
 
 
 def _vertex_name(vertex: Vertex) -> str:

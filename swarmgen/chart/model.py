@@ -6,7 +6,7 @@ rendered from this one structure, so they agree on structure and names by constr
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Any, Literal
 
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Value
@@ -21,17 +21,16 @@ class Assign:
 
 
 @dataclass(frozen=True, slots=True)
-class WriteBack:
-    """`location = event.data[field]` when the outcome event carries it (behaviour outputs)."""
+class FieldDefault:
+    """A JSON-like value the compiler supplies (a field's default when an effect omits it)."""
 
-    location: str
-    field: str
+    value: Any
 
 
 @dataclass(frozen=True, slots=True)
 class Param:
     name: str  # identifier
-    value: expr.Expr
+    value: expr.Expr | FieldDefault
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,7 +57,7 @@ class Opaque:
     text: str
 
 
-Action = Assign | WriteBack | Raise | Send | Opaque
+Action = Assign | Raise | Send | Opaque
 
 
 @dataclass(frozen=True, slots=True)
@@ -76,7 +75,10 @@ class Call:
     ident: str
     kind: str  # ComplexBehavior, SwarmBehavior, SwarmFunction, HardwareFunction
     args: tuple[Arg, ...]
-    results: tuple[tuple[str, str], ...]  # (output identifier, data id it is written to)
+    # (output identifier, data id it is written to): written when the behaviour ends, before
+    # its outcome is matched (docs/semantics.md)
+    results: tuple[tuple[str, str], ...]
+    outcomes: tuple[str, ...] = ()  # identifiers of the behaviour's declared outcomes
 
 
 @dataclass(frozen=True, slots=True)
@@ -120,7 +122,8 @@ class DataItem:
     id: str
     name: str
     type: str | None
-    default: Value
+    default: Value  # the model's default (None: none given)
+    initial: Any  # what it holds at start: the default, typed, else the type's zero
 
 
 @dataclass(frozen=True, slots=True)
@@ -145,6 +148,7 @@ class EventInfo:
     sender: str | None
     scope: str | None
     fields: tuple[tuple[str, str | None], ...]  # (identifier, type)
+    defaults: tuple[tuple[str, Any], ...] = ()  # (identifier, value when the sender omits it)
 
 
 @dataclass(frozen=True, slots=True)

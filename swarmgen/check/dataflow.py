@@ -117,12 +117,24 @@ def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
             read |= _names(action.value, chart)
         elif isinstance(action, c.Raise | c.Send):
             for param in action.params:
-                read |= _names(param.value, chart)
+                if not isinstance(param.value, c.FieldDefault):
+                    read |= _names(param.value, chart)
     return read
 
 
 def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
-    return {a.location for a in actions if isinstance(a, c.Assign | c.WriteBack)}
+    return {a.location for a in actions if isinstance(a, c.Assign)}
+
+
+def _outputs_written(owner: c.Node, transition: c.Transition) -> set[str]:
+    """A transition on the outcome of the owner's behaviour leaves with its outputs written
+    (they are written when the behaviour ends, before the outcome is matched)."""
+    if owner.call is None:
+        return set()
+    prefix = f"outcome.{owner.id}"
+    if any(e == prefix or e.startswith(prefix + ".") for e in transition.events):
+        return {location for _, location in owner.call.results}
+    return set()
 
 
 def _spans(model: Model) -> dict[str, Span]:
@@ -179,8 +191,9 @@ class _Graph:
     def _leaf_edges(self, leaf: c.Node) -> list[_Edge]:
         edges = []
         for owner_id in self._ancestors(leaf.id):
-            for transition in self.nodes[owner_id].transitions:
-                assigns = _assigned(transition.actions)
+            owner = self.nodes[owner_id]
+            for transition in owner.transitions:
+                assigns = _assigned(transition.actions) | _outputs_written(owner, transition)
                 label = " ".join(transition.events) or "(completion)"
                 for target in transition.targets or (leaf.id,):
                     entered = assigns | self._entry_assigns(target)

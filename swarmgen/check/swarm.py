@@ -12,10 +12,13 @@ from swarmgen.span import Span
 
 
 def check_counts(model: Model) -> list[Diagnostic]:
+    """Every part needs at least one member, even where other parts of its type make the
+    summed count (`query.composition`) positive: an empty part is a mistake, not a no-op."""
     return [
         dg.diag(
             dg.BAD_COUNT,
-            f"swarm '{swarm.name}' has {part.count} member(s) of type '{part.type_name}'",
+            f"part '{part.name}' of swarm '{swarm.name}' has {part.count} member(s) "
+            f"of type '{part.type_name}'",
             part.span,
             hint="set the part's multiplicity to at least 1, or remove the part",
         )

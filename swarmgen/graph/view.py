@@ -15,6 +15,7 @@ from enum import StrEnum
 from swarmgen.ir import expr
 from swarmgen.ir import nodes as ir
 from swarmgen.ir.query import ModelIndex, connection_owner
+from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import IdAllocator, identifier, one_line
 
 COMPOSITION_STEM = "swarm"
@@ -401,10 +402,26 @@ def _part_label(part: ir.Part) -> str:
     return part.name if part.count == 1 else f"{part.name} [{part.count}]"
 
 
+def _member_lines(model: ir.Model, member: ir.MemberType) -> tuple[str, ...]:
+    """Role, machine and, when several swarm parts have this type, the swarm's total of it
+    (`query.composition`, the count the backends and the simulator run): each part's arrow
+    shows only its own count. One part: no total line, its arrow says it."""
+    lines: list[str] = []
+    if member.role:
+        lines.append(f"role: {member.role}")
+    machine = ModelIndex(model).machines.get(member.machine or "")
+    if machine is not None:
+        lines.append(f"machine: {machine.name}")
+    parts = sum(p.type_name == member.name for s in model.swarms for p in s.members)
+    if parts > 1:
+        total = swarm_composition(model).get(member.name, 0)
+        lines.append(f"members: {total} ({parts} parts)")
+    return tuple(lines)
+
+
 def composition(model: ir.Model, member: ir.MemberType | None = None) -> Composition:
     """Swarms -> member types (with counts) -> hardware parts (with kinds) -> generalisations.
     With `member`, only what concerns that member type."""
-    index = ModelIndex(model)
     ids = IdAllocator()
     members = [member] if member is not None else list(model.member_types)
     member_ids = {m.id for m in members}
@@ -438,17 +455,11 @@ def composition(model: ir.Model, member: ir.MemberType | None = None) -> Composi
     for m in members:
         mid = ids.claim(f"member_{m.ident}")
         box_of[m.id] = mid
-        lines: list[str] = []
-        if m.role:
-            lines.append(f"role: {m.role}")
-        machine = index.machines.get(m.machine or "")
-        if machine is not None:
-            lines.append(f"machine: {machine.name}")
-        boxes.append(Box(mid, m.name, NodeKind.MEMBER, "SwarmMember", tuple(lines)))
+        boxes.append(Box(mid, m.name, NodeKind.MEMBER, "SwarmMember", _member_lines(model, m)))
     for component in shown:
         hid = ids.claim(f"hw_{component.ident}")
         box_of[component.id] = hid
-        lines = []
+        lines: list[str] = []
         if component.communication_type:
             lines.append(f"type: {component.communication_type}")
         boxes.append(

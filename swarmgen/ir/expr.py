@@ -816,6 +816,20 @@ def walk(expr: Expr) -> Iterator[Expr]:
         stack.extend(reversed(_children(node)))
 
 
+def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
+    """`event.<f>` read as the member datum `names[f]` instead (depth is bounded by the parser)."""
+    if isinstance(expr, EventField) and expr.field in names:
+        return Name(name=names[expr.field])
+    if isinstance(expr, Attr):
+        return Attr(obj=replace_fields(expr.obj, names), name=expr.name)
+    if isinstance(expr, Unary):
+        return Unary(op=expr.op, operand=replace_fields(expr.operand, names))
+    if isinstance(expr, Binary):
+        left, right = replace_fields(expr.left, names), replace_fields(expr.right, names)
+        return Binary(op=expr.op, left=left, right=right)
+    return expr
+
+
 def free_names(expr: Expr) -> frozenset[str]:
     """Member data names read by the expression (the root of `a.b` is `a`; no event fields)."""
     return frozenset(n.name for n in walk(expr) if isinstance(n, Name))
@@ -919,6 +933,11 @@ def _js_string(value: str) -> str:
     return quoted.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
 
 
+def js_string(value: str) -> str:
+    """An ECMAScript string literal, inert in XML and HTML too."""
+    return _js_string(value)
+
+
 def _js_const(value: Value) -> str:
     if value is None:
         return "null"
@@ -935,22 +954,29 @@ def _js_member(name: str) -> str:
 
 def _js_binary(b: Binary, name: Callable[[str], str]) -> str:
     left, right = to_ecmascript(b.left, name), to_ecmascript(b.right, name)
+    if b.op == "/":
+        # `$sg` is the emitted document's support script: a zero divisor is an error, as in
+        # Python (error.execution), not Infinity.
+        return f"$sg.div({left}, {right})"
     if b.op == "%":
-        # Python's % takes the sign of the divisor, ECMAScript's that of the dividend.
-        return f"((({left} % {right}) + {right}) % {right})"
+        # Python's %: the sign of the divisor (ECMAScript: of the dividend); zero is an error.
+        return f"$sg.mod({left}, {right})"
     op = {"and": "&&", "or": "||"}.get(b.op, b.op)
     return f"({left} {op} {right})"
 
 
 def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:
-    """Render for an SCXML ECMAScript datamodel; `name` maps member data to safe identifiers."""
+    """Render for an SCXML ECMAScript datamodel; `name` maps member data to safe identifiers.
+    Division, modulo and event fields call the document's `$sg` support script (`$` never
+    appears in an identifier swarmgen makes, so it cannot collide with member data)."""
     match expr:
         case Const():
             return _js_const(expr.value)
         case Name():
             return name(expr.name)
         case EventField():
-            return "_event.data" + _js_member(expr.field)
+            # a field the event does not carry is an error (in Python too), not `undefined`
+            return f"$sg.field(_event, {_js_string(expr.field)})"
         case Attr():
             return to_ecmascript(expr.obj, name) + _js_member(expr.name)
         case Unary():

@@ -8,6 +8,7 @@ from functools import cached_property
 
 from swarmgen.ir.nodes import (
     Behaviour,
+    DataType,
     Event,
     Machine,
     MemberType,
@@ -97,6 +98,7 @@ class ModelIndex:
         self.machines: dict[str, Machine] = {m.id: m for m in model.machines}
         self.behaviours: dict[str, Behaviour] = {b.id: b for b in model.behaviours}
         self.events: dict[str, Event] = {e.id: e for e in model.events}
+        self.datatypes: dict[str, DataType] = {d.name: d for d in model.datatypes}
         self.events_by_name: dict[str, Event] = {}
         for event in model.events:
             self.events_by_name.setdefault(event.name, event)
@@ -184,6 +186,19 @@ class ModelIndex:
     def member_machines(self, member: MemberType) -> list[Machine]:
         root = self.machines.get(member.machine or "")
         return self.reachable_machines(root) if root is not None else []
+
+
+def composition(model: Model) -> dict[str, int]:
+    """Member type name -> number of members in the swarm: the counts of all parts of that type,
+    summed over every part of every Swarm class (`uavs1: UAV[2]` and `uavs2: UAV[3]` make 5
+    UAVs), in the order the types first appear. Computed here once so that every backend, the
+    simulator and the composition diagram run the same swarm (a dict built part by part used to
+    keep only the last part of a type). Types that no swarm contains are absent."""
+    counts: dict[str, int] = {}
+    for swarm in model.swarms:
+        for part in swarm.members:
+            counts[part.type_name] = counts.get(part.type_name, 0) + part.count
+    return counts
 
 
 def vertices_by_id(machine: Machine) -> dict[str, Placed]:

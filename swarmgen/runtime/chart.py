@@ -36,6 +36,39 @@ def record(value: Any) -> Any:
     return value
 
 
+def zero_like(value: Any) -> Any:
+    """The zero of a value's type (every datum starts typed: docs/semantics.md, value rule)."""
+    if isinstance(value, bool):
+        return False
+    if isinstance(value, int):
+        return 0
+    if isinstance(value, float):
+        return 0.0
+    if isinstance(value, str):
+        return ""
+    if isinstance(value, Mapping):
+        return Record({str(k): zero_like(v) for k, v in value.items()})
+    if isinstance(value, list | tuple):
+        return []
+    return None
+
+
+def fill(value: Any, template: Any) -> Any:
+    """`value` with every field `template` has: what is missing (or null) takes the template's
+    value, recursively; fields the template does not know are kept."""
+    if isinstance(template, Mapping):
+        given = value if isinstance(value, Mapping) else {}
+        filled = Record({str(k): record(v) for k, v in given.items()})
+        for key, default in template.items():
+            filled[key] = fill(given.get(key), default)
+        return filled
+    return record(template) if value is None else record(value)
+
+
+FINALIZE_PREFIX = "done.invoke."  # the host's word that a state's behaviour ended
+OUTCOME_PREFIX = "outcome."  # the outcome as the state's transitions see it
+
+
 @dataclass(frozen=True, slots=True)
 class Call:
     """The library behaviour a state runs: name, how to compute its inputs, where outputs go."""
@@ -44,6 +77,7 @@ class Call:
     kind: str
     args: Callable[[Context], dict[str, Any]]
     results: tuple[tuple[str, str], ...] = ()  # (output, data key)
+    outcomes: tuple[str, ...] = ()  # the declared outcomes (raised after the outputs are written)
 
 
 @dataclass(eq=False, slots=True)
@@ -124,6 +158,7 @@ class Chart:
     nodes: dict[str, Node]
     data: dict[str, Any]  # initial member data
     names: dict[str, str]  # node id -> model name
+    events: dict[str, dict[str, Any]] = field(default_factory=dict)  # event -> field defaults
 
     def fresh_data(self) -> Record:
         return Record({key: record(value) for key, value in self.data.items()})
@@ -154,10 +189,13 @@ class Context:
     def send(self, name: str, data: Mapping[str, Any] | None = None) -> None:
         self._engine.send_swarm(name, data)
 
-    def write_back(self, key: str, field_name: str) -> None:
+    def field(self, name: str) -> Any:
+        """`event.<name>`: a field the current event does not carry is an error (SCXML's
+        error.execution; the guard is false), as `$sg.field` in the emitted SCXML."""
         data = self.event.data if self.event is not None else None
-        if isinstance(data, Mapping) and field_name in data:
-            self.data[key] = record(data[field_name])
+        if not isinstance(data, Mapping) or name not in data:
+            raise KeyError(f"the event has no field {name!r}")
+        return data[name]
 
     def opaque(self, language: str, text: str) -> None:
         """Code in a language swarmgen does not execute: recorded, not run."""
@@ -166,7 +204,13 @@ class Context:
 class ChartBuilder:
     """Used by generated code: declare nodes (parents first) and transitions, then `build()`."""
 
-    def __init__(self, name: str, data: Mapping[str, Any] | None = None) -> None:
+    def __init__(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None = None,
+        events: Mapping[str, Mapping[str, Any]] | None = None,
+    ) -> None:
+        self._events = {k: dict(v) for k, v in (events or {}).items()}
         self._root = Node("", "scxml")
         self._nodes: dict[str, Node] = {}
         self._pending: list[tuple[str, tuple[str, ...], tuple[str, ...], dict[str, Any]]] = []
@@ -232,6 +276,9 @@ class ChartBuilder:
             order += 1
             for child in reversed(node.children):
                 stack.append((child, depth + 1, (node, *ancestors)))
+        for node in self._nodes.values():
+            if node.call is not None:
+                node.transitions.append(self._finalize(node, node.call))
         for number, (source, events, targets, options) in enumerate(self._pending):
             node = self._lookup(source)
             node.transitions.append(
@@ -246,7 +293,30 @@ class ChartBuilder:
             owner.initial = Transition(
                 owner, (), tuple(self._lookup(t) for t in targets), action=action
             )
-        return Chart(self._name, self._root, dict(self._nodes), self._data, self._names)
+        return Chart(
+            self._name, self._root, dict(self._nodes), self._data, self._names, self._events
+        )
+
+    def _finalize(self, node: Node, call: Call) -> Transition:
+        """The first transition of a behaviour's state (SCXML `<finalize>` semantics): on
+        `done.invoke.<id>.<outcome>` it writes the outputs into member data, an output the
+        behaviour did not give as its type's zero (as a ROS result holds it), then raises the
+        internal event `outcome.<id>.<outcome>` when the outcome is declared, so guards and
+        effects (where `event.<output>` reads the datum) see the new values, whether or not a
+        transition takes the outcome."""
+        zeros = {key: zero_like(self._data.get(key)) for _, key in call.results}
+        prefix = f"{FINALIZE_PREFIX}{node.id}."
+        declared = frozenset(call.outcomes)
+
+        def finalize(ctx: Context) -> None:
+            given = ctx.event_data
+            for output, key in call.results:
+                ctx.data[key] = fill(given.get(output), zeros[key])
+            name = ctx.event.name if ctx.event is not None else ""
+            if name.startswith(prefix) and name[len(prefix) :] in declared:
+                ctx.raise_event(f"{OUTCOME_PREFIX}{node.id}.{name[len(prefix) :]}")
+
+        return Transition(node, (prefix[:-1],), (), action=finalize, order=-1)
 
     def _lookup(self, node_id: str) -> Node:
         try:

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from swarmgen.runtime.chart import Call, Chart, Node, record
-from swarmgen.runtime.engine import OUTCOME_PREFIX, Engine, Event
+from swarmgen.runtime.engine import FINALIZE_PREFIX, Engine, Event
 
 
 @dataclass(frozen=True, slots=True)
@@ -179,7 +179,7 @@ class Member:
         if outcome.reported:
             return
         event = self.engine.make_event(
-            f"{OUTCOME_PREFIX}{node.id}.{outcome.name}",
+            f"{FINALIZE_PREFIX}{node.id}.{outcome.name}",
             dict(outcome.outputs),
             self.member_id,
             origin=(node.id, activation),

@@ -18,7 +18,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from swarmgen.runtime.chart import Call, Chart, Node
-from swarmgen.runtime.engine import OUTCOME_PREFIX
+from swarmgen.runtime.engine import FINALIZE_PREFIX
 from swarmgen.runtime.member import Member, Outcome, Request
 
 Step = Mapping[str, Any]
@@ -137,11 +137,12 @@ def _record(number: int, step: Step | None, member: Member) -> dict[str, Any]:
         "input": describe(step) if step is not None else None,
         "active": member.active,
         "data": json.loads(json.dumps(member.engine.data, default=str)),
+        "errors": member.engine.error_count,  # error.execution so far (docs/semantics.md)
     }
 
 
 def outcome_event(node: Node, outcome: str) -> str:
-    return f"{OUTCOME_PREFIX}{node.id}.{outcome}"
+    return f"{FINALIZE_PREFIX}{node.id}.{outcome}"
 
 
 __all__ = ["Call", "describe", "expand", "outcome_event", "replay_async", "running_state"]

@@ -6,6 +6,7 @@ What SCXML has no element for (behaviour calls, swarm sends, library metadata) g
 
 from __future__ import annotations
 
+import json
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -18,12 +19,51 @@ from swarmgen.chart.lower import lower
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.names import identifier
+from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX, zero_like
 
 SCXML_NS = "http://www.w3.org/2005/07/scxml"
 SG_NS = "urn:swarmgen:scxml:1"
 _NSMAP = {None: SCXML_NS, "sg": SG_NS}
 _STATE_TAGS = ("state", "parallel", "final", "history")
 MAX_DEFAULT_LENGTH = 10_000
+# The support script every document carries (docs/scxml.md): what makes ECMAScript agree with
+# swarmgen's Python runtime. A zero divisor and a field the event does not carry are errors
+# (error.execution, the guard is false) instead of Infinity and `undefined`; `value` reads a
+# behaviour's output with the value rule (what is missing takes its zero, recursively).
+SUPPORT_SCRIPT = """
+var $sg = {
+  div: function (a, b) {
+    if (b == 0) { throw new RangeError("division by zero"); }
+    return a / b;
+  },
+  mod: function (a, b) {
+    if (b == 0) { throw new RangeError("modulo by zero"); }
+    return ((a % b) + b) % b;
+  },
+  field: function (e, f) {
+    var d = (e !== undefined && e !== null) ? e.data : undefined;
+    if (d === undefined || d === null || typeof d !== "object" ||
+        !Object.prototype.hasOwnProperty.call(d, f)) {
+      throw new TypeError("the event has no field " + f);
+    }
+    return d[f];
+  },
+  value: function (d, f, zero) {
+    var v = (d !== undefined && d !== null && typeof d === "object") ? d[f] : undefined;
+    return $sg.fill(v, zero);
+  },
+  fill: function (v, t) {
+    if (t === null || typeof t !== "object") {
+      return (v === undefined || v === null) ? t : v;
+    }
+    var g = (v !== undefined && v !== null && typeof v === "object") ? v : {};
+    var r = {};
+    for (var k in g) { r[k] = g[k]; }
+    for (var f in t) { r[f] = $sg.fill(g[f], t[f]); }
+    return r;
+  }
+};
+"""
 
 
 @dataclass(frozen=True)
@@ -50,8 +90,9 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
         scxml.set(_sg("member"), chart.member)
     if chart.initial:
         scxml.set("initial", " ".join(chart.initial))
-    writer = _Writer({d.name: d.id for d in chart.data})
+    writer = _Writer({d.name: d.id for d in chart.data}, {d.id: d for d in chart.data})
     writer.datamodel(scxml, chart.data)
+    _sub(scxml, "script").text = SUPPORT_SCRIPT
     for node in chart.children:
         writer.node(scxml, node)
     _metadata(scxml, chart)
@@ -93,6 +134,15 @@ def js_value(value: Value) -> str:
     return expr.to_ecmascript(expr.parse_expr(_literal_text(value)))
 
 
+def js_literal(value: object) -> str:
+    """An ECMAScript literal for a JSON-like value: scalars, and objects for data types."""
+    if isinstance(value, dict):
+        items = ", ".join(f"{expr.js_string(str(k))}: {js_literal(v)}" for k, v in value.items())
+        return "{" + items + "}"
+    scalar = value if isinstance(value, bool | int | float | str) else None
+    return js_value(scalar)
+
+
 def _literal_text(value: Value) -> str:
     if value is None:
         return "null"
@@ -106,8 +156,11 @@ def _literal_text(value: Value) -> str:
 @dataclass(frozen=True)
 class _Writer:
     data_ids: dict[str, str]  # model name of member data -> data id
+    data: dict[str, c.DataItem]  # data id -> item
 
-    def js(self, e: expr.Expr) -> str:
+    def js(self, e: expr.Expr | c.FieldDefault) -> str:
+        if isinstance(e, c.FieldDefault):
+            return js_literal(e.value)
         name: Callable[[str], str] = lambda n: self.data_ids.get(n) or identifier(n)  # noqa: E731
         return expr.to_ecmascript(e, name)
 
@@ -116,7 +169,7 @@ class _Writer:
             return
         datamodel = _sub(scxml, "datamodel")
         for item in data:
-            attrs = {"id": item.id, "expr": js_value(item.default)}
+            attrs = {"id": item.id, "expr": js_literal(item.initial)}
             if item.name != item.id:
                 attrs[_sg("name")] = item.name
             if item.type:
@@ -141,6 +194,8 @@ class _Writer:
             return
         self.onentry(element, node)
         self.onexit(element, node)
+        if node.call is not None:
+            self.finalize(element, node.id, node.call)
         for transition in node.transitions:
             self.transition(element, transition)
         if node.initial is not None:
@@ -149,10 +204,13 @@ class _Writer:
             self.node(element, child)
 
     def onentry(self, element: etree._Element, node: c.Node) -> None:
-        if not (node.onentry or node.call or node.timers):
+        """The model's entry actions, then the behaviour and timers in a block of their own
+        (an error in the model's actions ends only its block, never the timers)."""
+        if node.onentry:
+            self.actions(_sub(element, "onentry"), node.onentry)
+        if not (node.call or node.timers):
             return
         onentry = _sub(element, "onentry")
-        self.actions(onentry, node.onentry)
         if node.call is not None:
             self.call(onentry, node.call)
         for timer in node.timers:
@@ -163,12 +221,30 @@ class _Writer:
             )
 
     def onexit(self, element: etree._Element, node: c.Node) -> None:
-        if not (node.onexit or node.timers):
-            return
-        onexit = _sub(element, "onexit")
-        self.actions(onexit, node.onexit)
-        for timer in node.timers:
-            _sub(onexit, "cancel", {"sendid": timer.event})
+        if node.onexit:
+            self.actions(_sub(element, "onexit"), node.onexit)
+        if node.timers:
+            onexit = _sub(element, "onexit")
+            for timer in node.timers:
+                _sub(onexit, "cancel", {"sendid": timer.event})
+
+    def finalize(self, element: etree._Element, node_id: str, call: c.Call) -> None:
+        """The behaviour ended (`done.invoke.<id>.<outcome>` from the host): its outputs are
+        written first, then the internal event `outcome.<id>.<outcome>` is raised, so the
+        state's guards see the new values (W3C `<finalize>` semantics; docs/semantics.md).
+        One transition per declared outcome (`<raise>` names its event statically), and one
+        for any other outcome, which only writes the outputs."""
+        prefix = f"{FINALIZE_PREFIX}{node_id}"
+        for outcome in (*call.outcomes, None):
+            event = prefix if outcome is None else f"{prefix}.{outcome}"
+            transition = _sub(element, "transition", {"event": event})
+            transition.set(_sg("finalize"), call.behaviour)
+            for output, location in call.results:
+                zero = js_literal(zero_like(self.data[location].initial))
+                value = f"$sg.value(_event.data, {expr.js_string(output)}, {zero})"
+                _sub(transition, "assign", {"location": location, "expr": value})
+            if outcome is not None:
+                _sub(transition, "raise", {"event": f"{OUTCOME_PREFIX}{node_id}.{outcome}"})
 
     def call(self, onentry: etree._Element, call: c.Call) -> None:
         element = _sub(onentry, _sg("call"), {"behaviour": call.behaviour, "type": call.kind})
@@ -204,10 +280,6 @@ class _Writer:
         for action in actions:
             if isinstance(action, c.Assign):
                 _sub(parent, "assign", {"location": action.location, "expr": self.js(action.value)})
-            elif isinstance(action, c.WriteBack):
-                value = f"_event.data.{action.field}"
-                guarded = f"(_event.data && {value} !== undefined) ? {value} : {action.location}"
-                _sub(parent, "assign", {"location": action.location, "expr": guarded})
             elif isinstance(action, c.Raise) and not action.params:
                 _sub(parent, "raise", {"event": action.event})
             elif isinstance(action, c.Raise):
@@ -250,8 +322,13 @@ def _metadata(scxml: etree._Element, chart: c.Chart) -> None:
             for key, value in (("sender", event.sender), ("scope", event.scope)):
                 if value:
                     element.set(key, value)
+            defaults = dict(event.defaults)
             for name, type_ in event.fields:
-                _sub(element, _sg("field"), {"name": name, **({"type": type_} if type_ else {})})
+                field = _sub(element, _sg("field"), {"name": name})
+                if type_:
+                    field.set("type", type_)
+                if name in defaults:  # JSON: what a host fills in when a sender leaves it out
+                    field.set("default", json.dumps(defaults[name], sort_keys=True))
 
 
 def _behaviour(library: etree._Element, behaviour: c.BehaviourInfo) -> None:

@@ -42,19 +42,66 @@ SCXML = "{http://www.w3.org/2005/07/scxml}"
 SG = "{urn:swarmgen:scxml:1}"
 
 
-def _document(path: str) -> tuple[list[str], list[tuple[str, str]]]:
-    """(data ids, [(state id, behaviour)] in document order) from the SCXML file."""
+class _Document:
+    """What the harness reads from the document: data ids, the states that run behaviours
+    (document order) and the declared fields of each event with their defaults."""
+
+    def __init__(self, path: str) -> None:
+        self.data, self.calls, self.fields = _document(path)
+
+
+def _document(
+    path: str,
+) -> tuple[list[str], list[tuple[str, str]], dict[str, dict[str, Any]]]:
     import xml.etree.ElementTree as ET
 
     root = ET.parse(path).getroot()
     data = sorted(e.get("id", "") for e in root.iter(f"{SCXML}data"))
+    fields: dict[str, dict[str, Any]] = {}
+    for event in root.iter(f"{SG}event"):
+        defaults = {
+            f.get("name", ""): json.loads(f.get("default", "null"))
+            for f in event.findall(f"{SG}field")
+            if f.get("default") is not None
+        }
+        if defaults:
+            fields[event.get("id", "")] = defaults
     calls = []
     for element in root.iter():
         if element.tag in (f"{SCXML}state", f"{SCXML}parallel"):
             for onentry in element.findall(f"{SCXML}onentry"):
                 for call in onentry.findall(f"{SG}call"):
                     calls.append((element.get("id", ""), call.get("behaviour", "")))
-    return data, calls
+    return data, calls, fields
+
+
+def _fill(value: Any, template: Any) -> Any:
+    """The value rule (as the runtime's `fill`): a field the sender left out holds its default."""
+    if isinstance(template, dict):
+        given = value if isinstance(value, dict) else {}
+        filled = dict(given)
+        for key, default in template.items():
+            filled[key] = _fill(given.get(key), default)
+        return filled
+    return template if value is None else value
+
+
+class _Errors:
+    """Counts Qt's error.execution (Qt logs each error it raises in qt.scxml.statemachine)."""
+
+    count = 0
+
+    @classmethod
+    def install(cls) -> None:
+        from PySide2.QtCore import qInstallMessageHandler
+
+        def handler(mode: object, context: object, message: str) -> None:
+            if " had error " in message:
+                cls.count += 1
+            elif "qt.scxml" not in message and "DynamicStateMachine" not in message:
+                sys.stderr.write(message + "\n")
+
+        qInstallMessageHandler(handler)
 
 
 def _expand(step: dict[str, Any]) -> list[Any]:
@@ -70,27 +117,35 @@ def _describe(step: dict[str, Any]) -> str:
     return str(step.get("event", "?"))
 
 
-def _submit(machine: object, step: dict[str, Any], calls: list[tuple[str, str]]) -> None:
+def _submit(machine: object, step: dict[str, Any], document: _Document) -> None:
     """The same rules as swarmgen.runtime.replay: a `complete` step ends the behaviour of the
-    first active state (document order) that runs it, or of the state named."""
+    first active state (document order) that runs it, or of the state named; the host says so
+    with `done.invoke.<state>.<outcome>` (the document's finalize transition takes it)."""
     if "complete" in step:
         active = set(machine.activeStateNames(False))  # type: ignore[attr-defined]
         wanted = step.get("state")
-        for state, behaviour in calls:
+        for state, behaviour in document.calls:
             if (
                 behaviour == step["complete"]
                 and state in active
                 and (wanted is None or wanted == state)
             ):
                 outcome = step.get("outcome", "succeeded")
-                machine.submitEvent(f"outcome.{state}.{outcome}", step.get("outputs") or {})  # type: ignore[attr-defined]
+                machine.submitEvent(f"done.invoke.{state}.{outcome}", step.get("outputs") or {})  # type: ignore[attr-defined]
                 return
         return
-    machine.submitEvent(str(step["event"]), step.get("data") or {})  # type: ignore[attr-defined]
+    name = str(step["event"])
+    data = step.get("data") or {}
+    if name in document.fields:
+        data = _fill(data, document.fields[name])
+    machine.submitEvent(name, data)  # type: ignore[attr-defined]
 
 
 def _run(path: str, steps: list[dict[str, Any]], scenario: int | None = None) -> None:
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+    # Qt reports each error.execution only in this category's debug log: read, not shown.
+    os.environ["QT_LOGGING_RULES"] = "qt.scxml.statemachine.debug=true"
+    _Errors.install()
     from PySide2.QtCore import QCoreApplication
     from PySide2.QtScxml import QScxmlStateMachine
 
@@ -100,17 +155,18 @@ def _run(path: str, steps: list[dict[str, Any]], scenario: int | None = None) ->
     if errors:
         print(json.dumps({"errors": errors}), flush=True)
         return
-    names, calls = _document(path)
+    document = _Document(path)
+    _Errors.count = 0
     machine.start()
     _settle(app)
-    _report(machine, 0, None, names, scenario)
+    _report(machine, 0, None, document.data, scenario)
     for number, step in enumerate(steps, start=1):
         if isinstance(step, list):  # the older [event, data] form
             step = {"event": step[0], "data": step[1]}
         for item in _expand(step):
-            _submit(machine, item, calls)
+            _submit(machine, item, document)
         _settle(app)
-        _report(machine, number, _describe(step), names, scenario)
+        _report(machine, number, _describe(step), document.data, scenario)
     machine.stop()
     machine.deleteLater()
     _settle(app, 2)
@@ -122,7 +178,13 @@ def _report(
     model = machine.dataModel()  # type: ignore[attr-defined]
     data = {n: model.scxmlProperty(n) for n in names}
     active = sorted(machine.activeStateNames(False))  # type: ignore[attr-defined]
-    record = {"step": number, "input": described, "active": active, "data": data}
+    record = {
+        "step": number,
+        "input": described,
+        "active": active,
+        "data": data,
+        "errors": _Errors.count,
+    }
     if scenario is not None:
         record["scenario"] = scenario
     print(json.dumps(record, default=str), flush=True)

@@ -3,7 +3,7 @@
 The compiled state machine of each member decides which behaviour runs when: the engine asks the
 host to start a state's behaviour (with the arguments the compiled chart computed from member
 data) and to cancel it when the state is left; an implementation here ends it with an outcome
-and outputs, delivered as `outcome.<state>.<outcome>` exactly as the asyncio runtime delivers
+and outputs, delivered as `done.invoke.<state>.<outcome>` exactly as the asyncio runtime delivers
 them, and may emit swarm events through the member's bus. They are tick-driven counterparts of
 the runtime's async `Behaviour`s: instead of a coroutine per activation, each kind keeps its
 activations and the world advances all of them together (`World.advance`).

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from swarmgen.runtime.chart import Call, Chart, Node
-from swarmgen.runtime.engine import OUTCOME_PREFIX, Event
+from swarmgen.runtime.engine import FINALIZE_PREFIX, OUTCOME_PREFIX, Event
 from swarmgen.runtime.member import Behaviour, InMemoryBus, Member, Request
 from swarmgen.sim.library import Activation, Library, SimBehaviour, claims, found
 from swarmgen.sim.scenario import Scenario
@@ -91,6 +91,7 @@ def compile_machines(model: Path) -> Machines:
     from swarmgen import diagnostics as dg
     from swarmgen.backends.asyncio_backend import render_member
     from swarmgen.chart.lower import lower
+    from swarmgen.ir.query import composition as swarm_composition
 
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
@@ -111,10 +112,7 @@ def compile_machines(model: Path) -> Machines:
         )
     if not members:
         raise SimulationError(f"{model}: no member type has a state machine; nothing to simulate")
-    composition: dict[str, int] = {}
-    for swarm in validation.model.swarms:
-        for part in swarm.members:
-            composition[part.type_name] = composition.get(part.type_name, 0) + part.count
+    composition = swarm_composition(validation.model)
     return Machines(validation.model.name, model.name, tuple(members), composition)
 
 
@@ -374,7 +372,7 @@ class Batch:
         member = self.members[act.g]
         member.deliver(
             member.engine.make_event(
-                f"{OUTCOME_PREFIX}{act.node_id}.{outcome}",
+                f"{FINALIZE_PREFIX}{act.node_id}.{outcome}",
                 dict(outputs or {}),
                 member.member_id,
                 origin=(act.node_id, act.number),

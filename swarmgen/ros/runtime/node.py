@@ -5,7 +5,7 @@
 - After every step the node publishes its active states on `<namespace>/active_states`.
 - The behaviour a state runs is a ROS 2 action at `<namespace>/<action name>`: entering the state
   sends the goal (inputs from the call's arguments), leaving it cancels the goal, and the result
-  (`outcome` + outputs) becomes the outcome event `outcome.<state>.<outcome>`, tagged with the
+  (`outcome` + outputs) becomes the event `done.invoke.<state>.<outcome>`, tagged with the
   activation so that late results of cancelled goals are dropped (as in `runtime.member`).
 - Member data defaults and the hardware parameters are ROS parameters.
 
@@ -46,7 +46,7 @@ from rclpy.timer import Timer
 
 from ...runtime.chart import Call, Chart, record
 from ...runtime.chart import Node as ChartNode
-from ...runtime.engine import OUTCOME_PREFIX, Engine
+from ...runtime.engine import FINALIZE_PREFIX, Engine
 from ...runtime.engine import Event as SwarmEvent
 
 SWARM_TOPIC = "/swarm/events"
@@ -646,7 +646,7 @@ class MemberNode(Node):
             del self._runs[run.node.id]
         self.deliver(
             self.engine.make_event(
-                f"{OUTCOME_PREFIX}{run.node.id}.{outcome}",
+                f"{FINALIZE_PREFIX}{run.node.id}.{outcome}",
                 dict(outputs),
                 self.member_id,
                 origin=(run.node.id, run.activation),

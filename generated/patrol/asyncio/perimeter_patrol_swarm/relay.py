@@ -17,6 +17,9 @@ EVENT_SCOPES: dict[str, str] = {
     "recall": "swarm",
     "alarm": "swarm",
 }
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {"alarm": {"zone": 0, "level": 0}}
 
 
 def _args_1(ctx: Context) -> dict[str, Any]:
@@ -30,12 +33,12 @@ def _args_2(ctx: Context) -> dict[str, Any]:
 
 
 def _cond_3(ctx: Context) -> bool:
-    return bool(ctx.event_data.get("level") >= 3)
+    return bool(ctx.field("level") >= 3)
 
 
 def _action_4(ctx: Context) -> None:
     d = ctx.data
-    d["alarm_zone"] = ctx.event_data.get("zone")
+    d["alarm_zone"] = ctx.field("zone")
     d["alarms"] = d["alarms"] + 1
 
 
@@ -45,7 +48,9 @@ def _args_5(ctx: Context) -> dict[str, Any]:
 
 def build() -> Chart:
     """The statechart of member type Relay, ready for the engine."""
-    b = ChartBuilder(CHART_NAME, data={"alarm_zone": 0, "alarms": 0, "relay_altitude": 12.0})
+    b = ChartBuilder(
+        CHART_NAME, data={"alarm_zone": 0, "alarms": 0, "relay_altitude": 12.0}, events=EVENT_FIELDS
+    )
     b.node("Grounded", "state", None, name="Grounded")
     b.transition("Grounded", ("missionStart",), ("TakingOff",))
     b.node(
@@ -53,7 +58,9 @@ def build() -> Chart:
         "state",
         None,
         name="TakingOff",
-        call=Call("TakeOff", "HardwareFunction", _args_1, ()),
+        call=Call(
+            "TakeOff", "HardwareFunction", _args_1, (), ("succeeded", "aborted", "preempted")
+        ),
     )
     b.transition("TakingOff", ("outcome.TakingOff.succeeded",), ("Relaying",))
     b.transition("TakingOff", ("outcome.TakingOff.aborted",), ("Grounded",))
@@ -63,14 +70,18 @@ def build() -> Chart:
         "state",
         None,
         name="Relaying",
-        call=Call("RelayLink", "SwarmBehavior", _args_2, ()),
+        call=Call("RelayLink", "SwarmBehavior", _args_2, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition("Relaying", ("alarm",), ("Relaying",), cond=_cond_3, action=_action_4)
     b.transition("Relaying", ("missionAbort", "recall"), ("Landing",))
     b.transition("Relaying", ("outcome.Relaying.aborted",), ("Landing",))
     b.transition("Relaying", ("outcome.Relaying.succeeded",), ("Relaying",))
     b.node(
-        "Landing", "state", None, name="Landing", call=Call("Land", "HardwareFunction", _args_5, ())
+        "Landing",
+        "state",
+        None,
+        name="Landing",
+        call=Call("Land", "HardwareFunction", _args_5, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition("Landing", ("outcome.Landing.succeeded",), ("Landed",))
     b.transition("Landing", ("outcome.Landing.aborted",), ("Landing",))

@@ -20,6 +20,13 @@ EVENT_SCOPES: dict[str, str] = {
     "batteryStatus": "local",
     "lowBattery": "local",
 }
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {
+    "intrusion": {"zone": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}},
+    "alarm": {"zone": 0, "level": 0},
+    "batteryStatus": {"battery": 0.0},
+}
 
 
 def _args_1(ctx: Context) -> dict[str, Any]:
@@ -28,156 +35,138 @@ def _args_1(ctx: Context) -> dict[str, Any]:
 
 def _action_2(ctx: Context) -> None:
     d = ctx.data
-    ctx.write_back("zone_id", "zone_id")
-    ctx.write_back("zone_pose", "zone_pose")
     d["goal_pose"] = d["zone_pose"]
 
 
-def _action_3(ctx: Context) -> None:
-    ctx.write_back("zone_id", "zone_id")
-    ctx.write_back("zone_pose", "zone_pose")
-
-
-def _args_4(ctx: Context) -> dict[str, Any]:
+def _args_3(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"target_pose": d["goal_pose"]}
 
 
-def _action_5(ctx: Context) -> None:
+def _action_4(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _action_6(ctx: Context) -> None:
+def _action_5(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = d["retries"] + 1
 
 
-def _cond_7(ctx: Context) -> bool:
+def _cond_6(ctx: Context) -> bool:
     d = ctx.data
     return bool(d["retries"] < d["max_retries"])
 
 
-def _action_8(ctx: Context) -> None:
+def _action_7(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _args_9(ctx: Context) -> dict[str, Any]:
+def _args_8(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"zone_id": d["zone_id"]}
 
 
-def _action_10(ctx: Context) -> None:
+def _action_9(ctx: Context) -> None:
     d = ctx.data
-    ctx.write_back("intruder_pose", "intruder_pose")
     d["intruders"] = d["intruders"] + 1
 
 
-def _cond_11(ctx: Context) -> bool:
+def _cond_10(ctx: Context) -> bool:
     d = ctx.data
-    return bool((ctx.event_data.get("zone") == d["zone_id"]) and (not d["alarm_raised"]))
+    return bool((ctx.field("zone") == d["zone_id"]) and (not d["alarm_raised"]))
+
+
+def _action_11(ctx: Context) -> None:
+    d = ctx.data
+    ctx.send("alarm", {"zone": d["zone_id"], "level": 2})
+    d["alarm_raised"] = True
+    d["intruder_pose"] = ctx.field("pose")
 
 
 def _action_12(ctx: Context) -> None:
     d = ctx.data
-    ctx.send("alarm", {"zone": d["zone_id"], "level": 2})
-    d["alarm_raised"] = True
-    d["intruder_pose"] = ctx.event_data.get("pose")
-
-
-def _action_13(ctx: Context) -> None:
-    d = ctx.data
-    ctx.write_back("intruder_pose", "intruder_pose")
     d["intruders"] = 0
 
 
-def _action_14(ctx: Context) -> None:
-    ctx.write_back("intruder_pose", "intruder_pose")
-
-
-def _cond_15(ctx: Context) -> bool:
+def _cond_13(ctx: Context) -> bool:
     d = ctx.data
     return bool(d["intruders"] >= d["max_intruders"])
 
 
-def _action_16(ctx: Context) -> None:
+def _action_14(ctx: Context) -> None:
     d = ctx.data
     ctx.send("alarm", {"zone": d["zone_id"], "level": 3})
     d["alarm_raised"] = True
 
 
-def _action_17(ctx: Context) -> None:
+def _action_15(ctx: Context) -> None:
     d = ctx.data
     ctx.send("alarm", {"zone": d["zone_id"], "level": 1})
 
 
-def _args_18(ctx: Context) -> dict[str, Any]:
+def _args_16(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"target_pose": d["intruder_pose"]}
 
 
-def _action_19(ctx: Context) -> None:
+def _action_17(ctx: Context) -> None:
     d = ctx.data
     d["alarm_raised"] = False
 
 
-def _action_20(ctx: Context) -> None:
+def _action_18(ctx: Context) -> None:
     d = ctx.data
     d["goal_pose"] = d["dock_pose"]
 
 
-def _args_21(ctx: Context) -> dict[str, Any]:
+def _args_19(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"target_pose": d["goal_pose"]}
 
 
-def _action_22(ctx: Context) -> None:
+def _action_20(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _action_23(ctx: Context) -> None:
+def _action_21(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = d["retries"] + 1
 
 
-def _cond_24(ctx: Context) -> bool:
+def _cond_22(ctx: Context) -> bool:
     d = ctx.data
     return bool(d["retries"] < d["max_retries"])
 
 
-def _action_25(ctx: Context) -> None:
+def _action_23(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
+
+
+def _args_24(ctx: Context) -> dict[str, Any]:
+    return {}
+
+
+def _action_25(ctx: Context) -> None:
+    d = ctx.data
+    d["low_battery"] = d["battery"] < 20
 
 
 def _args_26(ctx: Context) -> dict[str, Any]:
     return {}
 
 
-def _action_27(ctx: Context) -> None:
+def _cond_27(ctx: Context) -> bool:
     d = ctx.data
-    ctx.write_back("battery", "battery")
-    d["low_battery"] = d["battery"] < 20
+    return bool((ctx.field("battery") < 20) and (not d["low_battery"]))
 
 
 def _action_28(ctx: Context) -> None:
-    ctx.write_back("battery", "battery")
-
-
-def _args_29(ctx: Context) -> dict[str, Any]:
-    return {}
-
-
-def _cond_30(ctx: Context) -> bool:
     d = ctx.data
-    return bool((ctx.event_data.get("battery") < 20) and (not d["low_battery"]))
-
-
-def _action_31(ctx: Context) -> None:
-    d = ctx.data
-    d["battery"] = ctx.event_data.get("battery")
+    d["battery"] = ctx.field("battery")
     d["low_battery"] = True
     ctx.raise_event("lowBattery", None)
 
@@ -189,9 +178,9 @@ def build() -> Chart:
         data={
             "alarm_raised": False,
             "battery": 100.0,
-            "dock_pose": None,
-            "goal_pose": None,
-            "intruder_pose": None,
+            "dock_pose": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "goal_pose": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "intruder_pose": {"x": 0.0, "y": 0.0, "z": 0.0},
             "intruders": 0,
             "low_battery": False,
             "maxSpeed": 0.6,
@@ -199,8 +188,9 @@ def build() -> Chart:
             "max_retries": 3,
             "retries": 0,
             "zone_id": 0,
-            "zone_pose": None,
+            "zone_pose": {"x": 0.0, "y": 0.0, "z": 0.0},
         },
+        events=EVENT_FIELDS,
     )
     b.node("Waiting", "state", None, name="Waiting")
     b.transition("Waiting", ("missionStart",), ("Operating",))
@@ -221,10 +211,11 @@ def build() -> Chart:
             "SwarmFunction",
             _args_1,
             (("zone_id", "zone_id"), ("zone_pose", "zone_pose")),
+            ("succeeded", "aborted", "preempted"),
         ),
     )
     b.transition("GetZone", ("outcome.GetZone.succeeded",), ("GoToZone",), action=_action_2)
-    b.transition("GetZone", ("outcome.GetZone.aborted",), ("GetZone",), action=_action_3)
+    b.transition("GetZone", ("outcome.GetZone.aborted",), ("GetZone",))
     b.node("GoToZone", "state", "Patrol", name="GoToZone")
     b.initial("GoToZone", ("GoToZone__Moving",))
     b.node(
@@ -232,23 +223,23 @@ def build() -> Chart:
         "state",
         "GoToZone",
         name="Moving",
-        call=Call("MoveTo", "HardwareFunction", _args_4, ()),
+        call=Call("MoveTo", "HardwareFunction", _args_3, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition(
         "GoToZone__Moving",
         ("outcome.GoToZone__Moving.succeeded",),
         ("GoToZone__Done",),
-        action=_action_5,
+        action=_action_4,
     )
     b.transition(
         "GoToZone__Moving",
         ("outcome.GoToZone__Moving.aborted",),
         ("GoToZone__Retry",),
-        action=_action_6,
+        action=_action_5,
     )
     b.node("GoToZone__Retry", "state", "GoToZone", name="Retry")
-    b.transition("GoToZone__Retry", (), ("GoToZone__Moving",), cond=_cond_7)
-    b.transition("GoToZone__Retry", (), ("GoToZone__Done",), action=_action_8)
+    b.transition("GoToZone__Retry", (), ("GoToZone__Moving",), cond=_cond_6)
+    b.transition("GoToZone__Retry", (), ("GoToZone__Done",), action=_action_7)
     b.node("GoToZone__Done", "final", "GoToZone", name="Done")
     b.transition("GoToZone", ("done.state.GoToZone",), ("Sweeping",))
     b.node(
@@ -256,15 +247,21 @@ def build() -> Chart:
         "state",
         "Patrol",
         name="Sweeping",
-        call=Call("PatrolZone", "SwarmBehavior", _args_9, (("intruder_pose", "intruder_pose"),)),
+        call=Call(
+            "PatrolZone",
+            "SwarmBehavior",
+            _args_8,
+            (("intruder_pose", "intruder_pose"),),
+            ("succeeded", "aborted", "preempted", "intruderSeen"),
+        ),
     )
-    b.transition("Sweeping", ("outcome.Sweeping.intruderSeen",), ("Assess",), action=_action_10)
-    b.transition("Sweeping", ("intrusion",), ("Investigate",), cond=_cond_11, action=_action_12)
-    b.transition("Sweeping", ("outcome.Sweeping.succeeded",), ("GetZone",), action=_action_13)
-    b.transition("Sweeping", ("outcome.Sweeping.aborted",), ("GetZone",), action=_action_14)
+    b.transition("Sweeping", ("outcome.Sweeping.intruderSeen",), ("Assess",), action=_action_9)
+    b.transition("Sweeping", ("intrusion",), ("Investigate",), cond=_cond_10, action=_action_11)
+    b.transition("Sweeping", ("outcome.Sweeping.succeeded",), ("GetZone",), action=_action_12)
+    b.transition("Sweeping", ("outcome.Sweeping.aborted",), ("GetZone",))
     b.node("Assess", "state", "Patrol", name="Assess")
-    b.transition("Assess", (), ("Investigate",), cond=_cond_15, action=_action_16)
-    b.transition("Assess", (), ("Sweeping",), action=_action_17)
+    b.transition("Assess", (), ("Investigate",), cond=_cond_13, action=_action_14)
+    b.transition("Assess", (), ("Sweeping",), action=_action_15)
     b.node("Investigate", "state", "Patrol", name="Investigate")
     b.initial("Investigate", ("Approach",))
     b.node(
@@ -272,15 +269,17 @@ def build() -> Chart:
         "state",
         "Investigate",
         name="Approach",
-        call=Call("MoveTo", "HardwareFunction", _args_18, ()),
+        call=Call(
+            "MoveTo", "HardwareFunction", _args_16, (), ("succeeded", "aborted", "preempted")
+        ),
     )
     b.transition(
-        "Approach", ("outcome.Approach.succeeded",), ("InvestigationDone",), action=_action_19
+        "Approach", ("outcome.Approach.succeeded",), ("InvestigationDone",), action=_action_17
     )
     b.transition("Approach", ("outcome.Approach.aborted",), ("InvestigationDone",))
     b.node("InvestigationDone", "final", "Investigate", name="InvestigationDone")
     b.transition("Investigate", ("done.state.Investigate",), ("Sweeping",))
-    b.transition("Patrol", ("lowBattery",), ("GoToDock",), action=_action_20)
+    b.transition("Patrol", ("lowBattery",), ("GoToDock",), action=_action_18)
     b.node("GoToDock", "state", "Main", name="GoToDock")
     b.initial("GoToDock", ("GoToDock__Moving",))
     b.node(
@@ -288,23 +287,25 @@ def build() -> Chart:
         "state",
         "GoToDock",
         name="Moving",
-        call=Call("MoveTo", "HardwareFunction", _args_21, ()),
+        call=Call(
+            "MoveTo", "HardwareFunction", _args_19, (), ("succeeded", "aborted", "preempted")
+        ),
     )
     b.transition(
         "GoToDock__Moving",
         ("outcome.GoToDock__Moving.succeeded",),
         ("GoToDock__Done",),
-        action=_action_22,
+        action=_action_20,
     )
     b.transition(
         "GoToDock__Moving",
         ("outcome.GoToDock__Moving.aborted",),
         ("GoToDock__Retry",),
-        action=_action_23,
+        action=_action_21,
     )
     b.node("GoToDock__Retry", "state", "GoToDock", name="Retry")
-    b.transition("GoToDock__Retry", (), ("GoToDock__Moving",), cond=_cond_24)
-    b.transition("GoToDock__Retry", (), ("GoToDock__Done",), action=_action_25)
+    b.transition("GoToDock__Retry", (), ("GoToDock__Moving",), cond=_cond_22)
+    b.transition("GoToDock__Retry", (), ("GoToDock__Done",), action=_action_23)
     b.node("GoToDock__Done", "final", "GoToDock", name="Done")
     b.transition("GoToDock", ("done.state.GoToDock",), ("Charging",))
     b.node(
@@ -312,10 +313,16 @@ def build() -> Chart:
         "state",
         "Main",
         name="Charging",
-        call=Call("Charge", "HardwareFunction", _args_26, (("battery", "battery"),)),
+        call=Call(
+            "Charge",
+            "HardwareFunction",
+            _args_24,
+            (("battery", "battery"),),
+            ("succeeded", "aborted", "preempted"),
+        ),
     )
-    b.transition("Charging", ("outcome.Charging.succeeded",), ("History",), action=_action_27)
-    b.transition("Charging", ("outcome.Charging.aborted",), ("Charging",), action=_action_28)
+    b.transition("Charging", ("outcome.Charging.succeeded",), ("History",), action=_action_25)
+    b.transition("Charging", ("outcome.Charging.aborted",), ("Charging",))
     b.node("BatteryMonitor", "state", "Operating", name="BatteryMonitor")
     b.initial("BatteryMonitor", ("Monitoring",))
     b.node(
@@ -323,10 +330,16 @@ def build() -> Chart:
         "state",
         "BatteryMonitor",
         name="Monitoring",
-        call=Call("BatteryMonitoring", "HardwareFunction", _args_29, ()),
+        call=Call(
+            "BatteryMonitoring",
+            "HardwareFunction",
+            _args_26,
+            (),
+            ("succeeded", "aborted", "preempted"),
+        ),
     )
     b.transition(
-        "Monitoring", ("batteryStatus",), ("Monitoring",), cond=_cond_30, action=_action_31
+        "Monitoring", ("batteryStatus",), ("Monitoring",), cond=_cond_27, action=_action_28
     )
     b.transition("Operating", ("missionAbort", "recall"), ("Stopped",))
     b.node("Stopped", "final", None, name="Stopped")

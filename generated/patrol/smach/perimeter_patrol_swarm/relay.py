@@ -9,6 +9,8 @@ docs/smach.md).
 
 from __future__ import annotations
 
+from typing import Any
+
 from ._runtime import smach
 from ._runtime.chart import Chart, Context
 
@@ -22,15 +24,18 @@ EVENT_SCOPES: dict[str, str] = {
     "recall": "swarm",
     "alarm": "swarm",
 }
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {"alarm": {"zone": 0, "level": 0}}
 
 
 def _cond_1(ctx: Context) -> bool:
-    return bool(ctx.event_data.get("level") >= 3)
+    return bool(ctx.field("level") >= 3)
 
 
 def _action_2(ctx: Context) -> None:
     d = ctx.data
-    d["alarm_zone"] = ctx.event_data.get("zone")
+    d["alarm_zone"] = ctx.field("zone")
     d["alarms"] = d["alarms"] + 1
 
 
@@ -85,4 +90,4 @@ def build_state_machine() -> smach.StateMachine:
 
 def build() -> Chart:
     """The statechart of member type Relay, ready for the engine."""
-    return build_state_machine().build_chart(CHART_NAME)
+    return build_state_machine().build_chart(CHART_NAME, events=EVENT_FIELDS)

@@ -9,6 +9,8 @@ docs/smach.md).
 
 from __future__ import annotations
 
+from typing import Any
+
 from ._runtime import smach
 from ._runtime.chart import Chart, Context
 
@@ -25,132 +27,121 @@ EVENT_SCOPES: dict[str, str] = {
     "batteryStatus": "local",
     "lowBattery": "local",
 }
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {
+    "intrusion": {"zone": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}},
+    "alarm": {"zone": 0, "level": 0},
+    "batteryStatus": {"battery": 0.0},
+}
 
 
 def _action_1(ctx: Context) -> None:
     d = ctx.data
-    ctx.write_back("zone_id", "zone_id")
-    ctx.write_back("zone_pose", "zone_pose")
     d["goal_pose"] = d["zone_pose"]
 
 
 def _action_2(ctx: Context) -> None:
-    ctx.write_back("zone_id", "zone_id")
-    ctx.write_back("zone_pose", "zone_pose")
+    d = ctx.data
+    d["retries"] = 0
 
 
 def _action_3(ctx: Context) -> None:
     d = ctx.data
-    d["retries"] = 0
-
-
-def _action_4(ctx: Context) -> None:
-    d = ctx.data
     d["retries"] = d["retries"] + 1
 
 
-def _cond_5(ctx: Context) -> bool:
+def _cond_4(ctx: Context) -> bool:
     d = ctx.data
     return bool(d["retries"] < d["max_retries"])
 
 
-def _action_6(ctx: Context) -> None:
+def _action_5(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _action_7(ctx: Context) -> None:
+def _action_6(ctx: Context) -> None:
     d = ctx.data
-    ctx.write_back("intruder_pose", "intruder_pose")
     d["intruders"] = d["intruders"] + 1
 
 
-def _cond_8(ctx: Context) -> bool:
+def _cond_7(ctx: Context) -> bool:
     d = ctx.data
-    return bool((ctx.event_data.get("zone") == d["zone_id"]) and (not d["alarm_raised"]))
+    return bool((ctx.field("zone") == d["zone_id"]) and (not d["alarm_raised"]))
+
+
+def _action_8(ctx: Context) -> None:
+    d = ctx.data
+    ctx.send("alarm", {"zone": d["zone_id"], "level": 2})
+    d["alarm_raised"] = True
+    d["intruder_pose"] = ctx.field("pose")
 
 
 def _action_9(ctx: Context) -> None:
     d = ctx.data
-    ctx.send("alarm", {"zone": d["zone_id"], "level": 2})
-    d["alarm_raised"] = True
-    d["intruder_pose"] = ctx.event_data.get("pose")
-
-
-def _action_10(ctx: Context) -> None:
-    d = ctx.data
-    ctx.write_back("intruder_pose", "intruder_pose")
     d["intruders"] = 0
 
 
-def _action_11(ctx: Context) -> None:
-    ctx.write_back("intruder_pose", "intruder_pose")
-
-
-def _cond_12(ctx: Context) -> bool:
+def _cond_10(ctx: Context) -> bool:
     d = ctx.data
     return bool(d["intruders"] >= d["max_intruders"])
 
 
-def _action_13(ctx: Context) -> None:
+def _action_11(ctx: Context) -> None:
     d = ctx.data
     ctx.send("alarm", {"zone": d["zone_id"], "level": 3})
     d["alarm_raised"] = True
 
 
-def _action_14(ctx: Context) -> None:
+def _action_12(ctx: Context) -> None:
     d = ctx.data
     ctx.send("alarm", {"zone": d["zone_id"], "level": 1})
 
 
-def _action_15(ctx: Context) -> None:
+def _action_13(ctx: Context) -> None:
     d = ctx.data
     d["alarm_raised"] = False
 
 
-def _action_16(ctx: Context) -> None:
+def _action_14(ctx: Context) -> None:
     d = ctx.data
     d["goal_pose"] = d["dock_pose"]
 
 
-def _action_17(ctx: Context) -> None:
+def _action_15(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _action_18(ctx: Context) -> None:
+def _action_16(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = d["retries"] + 1
 
 
-def _cond_19(ctx: Context) -> bool:
+def _cond_17(ctx: Context) -> bool:
     d = ctx.data
     return bool(d["retries"] < d["max_retries"])
 
 
-def _action_20(ctx: Context) -> None:
+def _action_18(ctx: Context) -> None:
     d = ctx.data
     d["retries"] = 0
 
 
-def _action_21(ctx: Context) -> None:
+def _action_19(ctx: Context) -> None:
     d = ctx.data
-    ctx.write_back("battery", "battery")
     d["low_battery"] = d["battery"] < 20
 
 
-def _action_22(ctx: Context) -> None:
-    ctx.write_back("battery", "battery")
-
-
-def _cond_23(ctx: Context) -> bool:
+def _cond_20(ctx: Context) -> bool:
     d = ctx.data
-    return bool((ctx.event_data.get("battery") < 20) and (not d["low_battery"]))
+    return bool((ctx.field("battery") < 20) and (not d["low_battery"]))
 
 
-def _action_24(ctx: Context) -> None:
+def _action_21(ctx: Context) -> None:
     d = ctx.data
-    d["battery"] = ctx.event_data.get("battery")
+    d["battery"] = ctx.field("battery")
     d["low_battery"] = True
     ctx.raise_event("lowBattery", None)
 
@@ -160,9 +151,9 @@ def build_state_machine() -> smach.StateMachine:
     sm = smach.StateMachine(outcomes=["Stopped"])
     sm.userdata.alarm_raised = False
     sm.userdata.battery = 100.0
-    sm.userdata.dock_pose = None
-    sm.userdata.goal_pose = None
-    sm.userdata.intruder_pose = None
+    sm.userdata.dock_pose = {"x": 0.0, "y": 0.0, "z": 0.0}
+    sm.userdata.goal_pose = {"x": 0.0, "y": 0.0, "z": 0.0}
+    sm.userdata.intruder_pose = {"x": 0.0, "y": 0.0, "z": 0.0}
     sm.userdata.intruders = 0
     sm.userdata.low_battery = False
     sm.userdata.maxSpeed = 0.6
@@ -170,7 +161,7 @@ def build_state_machine() -> smach.StateMachine:
     sm.userdata.max_retries = 3
     sm.userdata.retries = 0
     sm.userdata.zone_id = 0
-    sm.userdata.zone_pose = None
+    sm.userdata.zone_pose = {"x": 0.0, "y": 0.0, "z": 0.0}
     with sm:
         sm.set_initial_state(["Waiting"])
         smach.StateMachine.add(
@@ -202,7 +193,7 @@ def make_main() -> smach.StateMachine:
         smach.StateMachine.add(
             "Patrol",
             make_patrol(),
-            transitions=[smach.Transition("lowBattery", "GoToDock", action=_action_16)],
+            transitions=[smach.Transition("lowBattery", "GoToDock", action=_action_14)],
         )
         smach.StateMachine.add(
             "GoToDock", make_go_to_dock(), transitions={"GoToDock__Done": "Charging"}
@@ -216,8 +207,8 @@ def make_main() -> smach.StateMachine:
                 output_keys=["battery"],
             ),
             transitions=[
-                smach.Transition("succeeded", "Patrol/History", action=_action_21),
-                smach.Transition("aborted", "Charging", action=_action_22),
+                smach.Transition("succeeded", "Patrol/History", action=_action_19),
+                smach.Transition("aborted", "Charging"),
             ],
         )
     return sm
@@ -239,7 +230,7 @@ def make_patrol() -> smach.StateMachine:
             ),
             transitions=[
                 smach.Transition("succeeded", "GoToZone", action=_action_1),
-                smach.Transition("aborted", "GetZone", action=_action_2),
+                smach.Transition("aborted", "GetZone"),
             ],
         )
         smach.StateMachine.add(
@@ -255,18 +246,18 @@ def make_patrol() -> smach.StateMachine:
                 output_keys=["intruder_pose"],
             ),
             transitions=[
-                smach.Transition("intruderSeen", "Assess", action=_action_7),
-                smach.Transition("intrusion", "Investigate", guard=_cond_8, action=_action_9),
-                smach.Transition("succeeded", "GetZone", action=_action_10),
-                smach.Transition("aborted", "GetZone", action=_action_11),
+                smach.Transition("intruderSeen", "Assess", action=_action_6),
+                smach.Transition("intrusion", "Investigate", guard=_cond_7, action=_action_8),
+                smach.Transition("succeeded", "GetZone", action=_action_9),
+                smach.Transition("aborted", "GetZone"),
             ],
         )
         smach.StateMachine.add(
             "Assess",
             smach.PseudoState("choice"),
             transitions=[
-                smach.Transition(to="Investigate", guard=_cond_12, action=_action_13),
-                smach.Transition(to="Sweeping", action=_action_14),
+                smach.Transition(to="Investigate", guard=_cond_10, action=_action_11),
+                smach.Transition(to="Sweeping", action=_action_12),
             ],
         )
         smach.StateMachine.add(
@@ -289,8 +280,8 @@ def make_go_to_zone() -> smach.StateMachine:
                 input_keys=["target_pose"],
             ),
             transitions=[
-                smach.Transition("succeeded", "GoToZone__Done", action=_action_3),
-                smach.Transition("aborted", "GoToZone__Retry", action=_action_4),
+                smach.Transition("succeeded", "GoToZone__Done", action=_action_2),
+                smach.Transition("aborted", "GoToZone__Retry", action=_action_3),
             ],
             remapping={"target_pose": "goal_pose"},
             name="Moving",
@@ -299,8 +290,8 @@ def make_go_to_zone() -> smach.StateMachine:
             "GoToZone__Retry",
             smach.PseudoState("choice"),
             transitions=[
-                smach.Transition(to="GoToZone__Moving", guard=_cond_5),
-                smach.Transition(to="GoToZone__Done", action=_action_6),
+                smach.Transition(to="GoToZone__Moving", guard=_cond_4),
+                smach.Transition(to="GoToZone__Done", action=_action_5),
             ],
             name="Retry",
         )
@@ -322,7 +313,7 @@ def make_investigate() -> smach.StateMachine:
                 input_keys=["target_pose"],
             ),
             transitions=[
-                smach.Transition("succeeded", "InvestigationDone", action=_action_15),
+                smach.Transition("succeeded", "InvestigationDone", action=_action_13),
                 smach.Transition("aborted", "InvestigationDone"),
             ],
             remapping={"target_pose": "intruder_pose"},
@@ -345,8 +336,8 @@ def make_go_to_dock() -> smach.StateMachine:
                 input_keys=["target_pose"],
             ),
             transitions=[
-                smach.Transition("succeeded", "GoToDock__Done", action=_action_17),
-                smach.Transition("aborted", "GoToDock__Retry", action=_action_18),
+                smach.Transition("succeeded", "GoToDock__Done", action=_action_15),
+                smach.Transition("aborted", "GoToDock__Retry", action=_action_16),
             ],
             remapping={"target_pose": "goal_pose"},
             name="Moving",
@@ -355,8 +346,8 @@ def make_go_to_dock() -> smach.StateMachine:
             "GoToDock__Retry",
             smach.PseudoState("choice"),
             transitions=[
-                smach.Transition(to="GoToDock__Moving", guard=_cond_19),
-                smach.Transition(to="GoToDock__Done", action=_action_20),
+                smach.Transition(to="GoToDock__Moving", guard=_cond_17),
+                smach.Transition(to="GoToDock__Done", action=_action_18),
             ],
             name="Retry",
         )
@@ -377,7 +368,7 @@ def make_battery_monitor() -> smach.StateMachine:
                 outcomes=["succeeded", "aborted", "preempted"],
             ),
             transitions=[
-                smach.Transition("batteryStatus", "Monitoring", guard=_cond_23, action=_action_24)
+                smach.Transition("batteryStatus", "Monitoring", guard=_cond_20, action=_action_21)
             ],
         )
     return sm
@@ -385,4 +376,4 @@ def make_battery_monitor() -> smach.StateMachine:
 
 def build() -> Chart:
     """The statechart of member type Scout, ready for the engine."""
-    return build_state_machine().build_chart(CHART_NAME)
+    return build_state_machine().build_chart(CHART_NAME, events=EVENT_FIELDS)

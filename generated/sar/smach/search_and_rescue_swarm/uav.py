@@ -9,6 +9,8 @@ docs/smach.md).
 
 from __future__ import annotations
 
+from typing import Any
+
 from ._runtime import smach
 from ._runtime.chart import Chart, Context
 
@@ -22,30 +24,17 @@ EVENT_SCOPES: dict[str, str] = {
     "missionAbort": "swarm",
     "targetFound": "swarm",
 }
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {
+    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+}
 
 
 def _action_1(ctx: Context) -> None:
     d = ctx.data
-    d["target_id"] = ctx.event_data.get("target_id")
-    d["target_pose"] = ctx.event_data.get("pose")
-
-
-def _action_2(ctx: Context) -> None:
-    ctx.write_back("rover_id", "rover_id")
-
-
-def _action_3(ctx: Context) -> None:
-    ctx.write_back("rover_id", "rover_id")
-
-
-def _action_4(ctx: Context) -> None:
-    ctx.write_back("target_id", "target_id")
-    ctx.write_back("target_pose", "target_pose")
-
-
-def _action_5(ctx: Context) -> None:
-    ctx.write_back("target_id", "target_id")
-    ctx.write_back("target_pose", "target_pose")
+    d["target_id"] = ctx.field("target_id")
+    d["target_pose"] = ctx.field("pose")
 
 
 def build_state_machine() -> smach.StateMachine:
@@ -56,7 +45,7 @@ def build_state_machine() -> smach.StateMachine:
     sm.userdata.rover_id = 0
     sm.userdata.simulation = False
     sm.userdata.target_id = 0
-    sm.userdata.target_pose = None
+    sm.userdata.target_pose = {"x": 0.0, "y": 0.0, "z": 0.0}
     with sm:
         sm.set_initial_state(["Mission"])
         smach.StateMachine.add("Mission", make_mission(), transitions={"missionAbort": "Land"})
@@ -129,10 +118,7 @@ def make_sar_behavior() -> smach.StateMachine:
                 input_keys=["target_id", "target_pose"],
                 output_keys=["rover_id"],
             ),
-            transitions=[
-                smach.Transition("succeeded", "Tracking", action=_action_2),
-                smach.Transition("aborted", "Coverage", action=_action_3),
-            ],
+            transitions={"succeeded": "Tracking", "aborted": "Coverage"},
         )
         smach.StateMachine.add(
             "Tracking",
@@ -157,10 +143,7 @@ def make_sar_behavior() -> smach.StateMachine:
                 input_keys=["altitude"],
                 output_keys=["target_id", "target_pose"],
             ),
-            transitions=[
-                smach.Transition("succeeded", "Tracking", action=_action_4),
-                smach.Transition("aborted", "Coverage", action=_action_5),
-            ],
+            transitions={"succeeded": "Tracking", "aborted": "Coverage"},
         )
     return sm
 
@@ -195,4 +178,4 @@ def make_hardware_functions() -> smach.StateMachine:
 
 def build() -> Chart:
     """The statechart of member type UAV, ready for the engine."""
-    return build_state_machine().build_chart(CHART_NAME)
+    return build_state_machine().build_chart(CHART_NAME, events=EVENT_FIELDS)

@@ -9,6 +9,8 @@ docs/smach.md).
 
 from __future__ import annotations
 
+from typing import Any
+
 from ._runtime import smach
 from ._runtime.chart import Chart, Context
 
@@ -17,12 +19,17 @@ MEMBER_TYPE = "UGV"
 MACHINE = "UgvRescue"
 # How each event this member sends is delivered: "swarm" (every member) or "local" (itself).
 EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "targetFound": "swarm"}
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {
+    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+}
 
 
 def _action_1(ctx: Context) -> None:
     d = ctx.data
-    d["target_id"] = ctx.event_data.get("target_id")
-    d["target_pose"] = ctx.event_data.get("pose")
+    d["target_id"] = ctx.field("target_id")
+    d["target_pose"] = ctx.field("pose")
 
 
 def build_state_machine() -> smach.StateMachine:
@@ -30,7 +37,7 @@ def build_state_machine() -> smach.StateMachine:
     sm = smach.StateMachine(outcomes=["Stopped"])
     sm.userdata.maxSpeed = 0.5
     sm.userdata.target_id = 0
-    sm.userdata.target_pose = None
+    sm.userdata.target_pose = {"x": 0.0, "y": 0.0, "z": 0.0}
     with sm:
         sm.set_initial_state(["Operating"])
         smach.StateMachine.add(
@@ -86,4 +93,4 @@ def make_operating() -> smach.StateMachine:
 
 def build() -> Chart:
     """The statechart of member type UGV, ready for the engine."""
-    return build_state_machine().build_chart(CHART_NAME)
+    return build_state_machine().build_chart(CHART_NAME, events=EVENT_FIELDS)

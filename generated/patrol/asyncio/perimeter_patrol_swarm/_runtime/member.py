@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from .chart import Call, Chart, Node, record
-from .engine import OUTCOME_PREFIX, Engine, Event
+from .engine import FINALIZE_PREFIX, Engine, Event
 
 
 @dataclass(frozen=True, slots=True)
@@ -180,7 +180,7 @@ class Member:
         if outcome.reported:
             return
         event = self.engine.make_event(
-            f"{OUTCOME_PREFIX}{node.id}.{outcome.name}",
+            f"{FINALIZE_PREFIX}{node.id}.{outcome.name}",
             dict(outcome.outputs),
             self.member_id,
             origin=(node.id, activation),

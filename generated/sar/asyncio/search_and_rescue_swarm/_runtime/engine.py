@@ -17,9 +17,20 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from .chart import Call, Chart, Context, Node, Record, Transition, record
+from .chart import (
+    FINALIZE_PREFIX,
+    OUTCOME_PREFIX,
+    Call,
+    Chart,
+    Context,
+    Node,
+    Record,
+    Transition,
+    fill,
+    record,
+)
 
-OUTCOME_PREFIX = "outcome."
+__all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "Engine", "Event", "Host", "NullHost"]
 
 
 @dataclass(slots=True)
@@ -41,6 +52,7 @@ class Host(Protocol):
     def start_timer(self, node: Node, event: str, delay_ms: int) -> None: ...
     def cancel_timer(self, node: Node, event: str) -> None: ...
     def send_swarm(self, event: Event) -> None: ...
+    def deliver(self, event: Event) -> None: ...
 
 
 class NullHost:
@@ -49,6 +61,7 @@ class NullHost:
     def __init__(self) -> None:
         self.calls: list[tuple[str, str, dict[str, Any]]] = []
         self.sent: list[Event] = []
+        self.delivered: list[Event] = []  # events to itself (a `raise` with data)
         self.timers: dict[str, int] = {}
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
@@ -65,6 +78,9 @@ class NullHost:
 
     def send_swarm(self, event: Event) -> None:
         self.sent.append(event)
+
+    def deliver(self, event: Event) -> None:
+        self.delivered.append(event)
 
 
 @dataclass
@@ -88,6 +104,7 @@ class Engine:
         self._ids = itertools.count(1)
         self._active_ids: frozenset[str] | None = None
         self._atomic: list[Node] | None = None  # atomic states of the configuration, in order
+        self.error_count = 0  # error.execution events raised so far (traces report them)
 
     # --- public
 
@@ -105,6 +122,9 @@ class Engine:
             return
         if event.origin is not None and not self._current_activation(event.origin):
             return  # the outcome of a behaviour that was cancelled: discarded
+        template = self.chart.events.get(event.name)
+        if template:  # the value rule: a declared field the sender left out holds its default
+            event.data = fill(event.data, template)
         self.ctx.event = event
         enabled = self._select_transitions(event)
         if enabled:
@@ -140,7 +160,13 @@ class Engine:
     # --- services for actions (Context)
 
     def raise_internal(self, name: str, data: Mapping[str, Any] | None) -> None:
-        self.internal.append(self.make_event(name, data, self.member_id, kind="internal"))
+        """`raise e`: the internal queue. `raise e(f = ...)` carries data, which SCXML can only
+        do with `<send target="#_internal">`, and Qt SCXML queues that after the external events
+        already waiting: so does swarmgen (docs/semantics.md), through the host's own queue."""
+        if data is None:
+            self.internal.append(self.make_event(name, None, self.member_id, kind="internal"))
+        else:
+            self.host.deliver(self.make_event(name, data, self.member_id))
 
     def send_swarm(self, name: str, data: Mapping[str, Any] | None) -> None:
         self.host.send_swarm(self.make_event(name, data, self.member_id))
@@ -165,11 +191,22 @@ class Engine:
             if node in self.config and node.call is not None:
                 activation = self._activation.get(node, 0) + 1
                 self._activation[node] = activation
-                args = self._guarded(node.call.args, f"arguments of {node.id}")
+                args = self._arguments(node, node.call)
                 self.host.start_call(
                     node, node.call, args if isinstance(args, dict) else {}, activation
                 )
         self._to_invoke.clear()
+
+    def _arguments(self, node: Node, call: Call) -> dict[str, Any]:
+        """A behaviour's inputs. An input that cannot be computed is the host's business (the
+        SCXML document does not evaluate `<sg:arg>`), so it raises no error.execution."""
+        try:
+            args = call.args(self.ctx)
+        except Exception as err:
+            if self.on_error is not None:
+                self.on_error(f"arguments of {node.id}", err)
+            return {}
+        return args if isinstance(args, dict) else {}
 
     def _current_activation(self, origin: tuple[str, int]) -> bool:
         node = self.chart.nodes.get(origin[0])
@@ -423,11 +460,9 @@ class Engine:
             return None
 
     def _error(self, where: str, err: BaseException) -> None:
-        self.internal.append(
-            self.make_event(
-                "error.execution", {"where": where, "error": repr(err)}, kind="platform"
-            )
-        )
+        self.error_count += 1
+        # no data, as in Qt SCXML: `where` and the error go to the host (`on_error`)
+        self.internal.append(self.make_event("error.execution", None, kind="platform"))
         if self.on_error is not None:
             self.on_error(where, err)
 

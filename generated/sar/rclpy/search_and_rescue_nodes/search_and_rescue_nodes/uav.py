@@ -18,6 +18,11 @@ EVENT_SCOPES: dict[str, str] = {
     "missionAbort": "swarm",
     "targetFound": "swarm",
 }
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {
+    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+}
 # The behaviours this member runs: one ROS 2 action each, in the member's namespace.
 BEHAVIOURS: dict[str, BehaviourSpec] = {
     "Coverage": BehaviourSpec(
@@ -142,7 +147,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "data.target_pose",
         "json",
-        None,
+        {"x": 0.0, "y": 0.0, "z": 0.0},
         data="target_pose",
         description="member data target_pose (Pose)",
     ),
@@ -430,8 +435,8 @@ def _args_2(ctx: Context) -> dict[str, Any]:
 
 def _action_3(ctx: Context) -> None:
     d = ctx.data
-    d["target_id"] = ctx.event_data.get("target_id")
-    d["target_pose"] = ctx.event_data.get("pose")
+    d["target_id"] = ctx.field("target_id")
+    d["target_pose"] = ctx.field("pose")
 
 
 def _args_4(ctx: Context) -> dict[str, Any]:
@@ -439,43 +444,25 @@ def _args_4(ctx: Context) -> dict[str, Any]:
     return {"target_id": d["target_id"], "target_pose": d["target_pose"]}
 
 
-def _action_5(ctx: Context) -> None:
-    ctx.write_back("rover_id", "rover_id")
-
-
-def _action_6(ctx: Context) -> None:
-    ctx.write_back("rover_id", "rover_id")
-
-
-def _args_7(ctx: Context) -> dict[str, Any]:
+def _args_5(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"target_id": d["target_id"], "altitude": d["altitude"], "rover_id": d["rover_id"]}
 
 
-def _args_8(ctx: Context) -> dict[str, Any]:
+def _args_6(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"altitude": d["altitude"]}
 
 
-def _action_9(ctx: Context) -> None:
-    ctx.write_back("target_id", "target_id")
-    ctx.write_back("target_pose", "target_pose")
-
-
-def _action_10(ctx: Context) -> None:
-    ctx.write_back("target_id", "target_id")
-    ctx.write_back("target_pose", "target_pose")
-
-
-def _args_11(ctx: Context) -> dict[str, Any]:
+def _args_7(ctx: Context) -> dict[str, Any]:
     return {}
 
 
-def _args_12(ctx: Context) -> dict[str, Any]:
+def _args_8(ctx: Context) -> dict[str, Any]:
     return {}
 
 
-def _args_13(ctx: Context) -> dict[str, Any]:
+def _args_9(ctx: Context) -> dict[str, Any]:
     return {}
 
 
@@ -489,8 +476,9 @@ def build() -> Chart:
             "rover_id": 0,
             "simulation": False,
             "target_id": 0,
-            "target_pose": None,
+            "target_pose": {"x": 0.0, "y": 0.0, "z": 0.0},
         },
+        events=EVENT_FIELDS,
     )
     b.node("Mission", "parallel", None, name="Mission")
     b.node("Behavior", "state", "Mission", name="Behavior")
@@ -504,7 +492,9 @@ def build() -> Chart:
         "state",
         "SarBehavior",
         name="TakeOff",
-        call=Call("TakeOff", "HardwareFunction", _args_1, ()),
+        call=Call(
+            "TakeOff", "HardwareFunction", _args_1, (), ("succeeded", "aborted", "preempted")
+        ),
     )
     b.transition("TakeOff", ("outcome.TakeOff.succeeded",), ("Loitering",))
     b.transition("TakeOff", ("outcome.TakeOff.aborted",), ("Idle",))
@@ -520,6 +510,7 @@ def build() -> Chart:
             "SwarmBehavior",
             _args_2,
             (("target_id", "target_id"), ("target_pose", "target_pose")),
+            ("succeeded", "aborted", "preempted"),
         ),
     )
     b.transition("Coverage", ("targetFound",), ("SelectRover",), action=_action_3)
@@ -528,16 +519,28 @@ def build() -> Chart:
         "state",
         "SarBehavior",
         name="SelectRover",
-        call=Call("TaskAllocation", "SwarmFunction", _args_4, (("rover_id", "rover_id"),)),
+        call=Call(
+            "TaskAllocation",
+            "SwarmFunction",
+            _args_4,
+            (("rover_id", "rover_id"),),
+            ("succeeded", "aborted", "preempted"),
+        ),
     )
-    b.transition("SelectRover", ("outcome.SelectRover.succeeded",), ("Tracking",), action=_action_5)
-    b.transition("SelectRover", ("outcome.SelectRover.aborted",), ("Coverage",), action=_action_6)
+    b.transition("SelectRover", ("outcome.SelectRover.succeeded",), ("Tracking",))
+    b.transition("SelectRover", ("outcome.SelectRover.aborted",), ("Coverage",))
     b.node(
         "Tracking",
         "state",
         "SarBehavior",
         name="Tracking",
-        call=Call("Tracking", "SwarmBehavior", _args_7, ()),
+        call=Call(
+            "Tracking",
+            "SwarmBehavior",
+            _args_5,
+            (),
+            ("succeeded", "aborted", "preempted", "targetLost"),
+        ),
     )
     b.transition("Tracking", ("outcome.Tracking.succeeded",), ("Coverage",))
     b.transition("Tracking", ("outcome.Tracking.targetLost",), ("LocalCoverage",))
@@ -550,16 +553,13 @@ def build() -> Chart:
         call=Call(
             "LocalCoverage",
             "SwarmBehavior",
-            _args_8,
+            _args_6,
             (("target_id", "target_id"), ("target_pose", "target_pose")),
+            ("succeeded", "aborted", "preempted"),
         ),
     )
-    b.transition(
-        "LocalCoverage", ("outcome.LocalCoverage.succeeded",), ("Tracking",), action=_action_9
-    )
-    b.transition(
-        "LocalCoverage", ("outcome.LocalCoverage.aborted",), ("Coverage",), action=_action_10
-    )
+    b.transition("LocalCoverage", ("outcome.LocalCoverage.succeeded",), ("Tracking",))
+    b.transition("LocalCoverage", ("outcome.LocalCoverage.aborted",), ("Coverage",))
     b.node("SwarmFunctions", "state", "Mission", name="SwarmFunctions")
     b.initial("SwarmFunctions", ("TargetMonitoring",))
     b.node(
@@ -567,7 +567,9 @@ def build() -> Chart:
         "state",
         "SwarmFunctions",
         name="TargetMonitoring",
-        call=Call("TargetMonitoring", "SwarmFunction", _args_11, ()),
+        call=Call(
+            "TargetMonitoring", "SwarmFunction", _args_7, (), ("succeeded", "aborted", "preempted")
+        ),
     )
     b.node("HardwareFunctions", "state", "Mission", name="HardwareFunctions")
     b.initial("HardwareFunctions", ("Positioning",))
@@ -576,10 +578,18 @@ def build() -> Chart:
         "state",
         "HardwareFunctions",
         name="Positioning",
-        call=Call("UwbPositioning", "HardwareFunction", _args_12, ()),
+        call=Call(
+            "UwbPositioning", "HardwareFunction", _args_8, (), ("succeeded", "aborted", "preempted")
+        ),
     )
     b.transition("Mission", ("missionAbort",), ("Land",))
-    b.node("Land", "state", None, name="Land", call=Call("Land", "HardwareFunction", _args_13, ()))
+    b.node(
+        "Land",
+        "state",
+        None,
+        name="Land",
+        call=Call("Land", "HardwareFunction", _args_9, (), ("succeeded", "aborted", "preempted")),
+    )
     b.transition("Land", ("outcome.Land.succeeded",), ("Landed",))
     b.transition("Land", ("outcome.Land.aborted",), ("Land",))
     b.node("Landed", "final", None, name="Landed")

@@ -13,6 +13,11 @@ MEMBER_TYPE = "UGV"
 MACHINE = "UgvRescue"
 # How each event this member sends is delivered: "swarm" (every member) or "local" (itself).
 EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "targetFound": "swarm"}
+# Every field of each event this member receives, with the value it holds when the sender
+# leaves it out (docs/semantics.md, the value rule).
+EVENT_FIELDS: dict[str, dict[str, Any]] = {
+    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+}
 # The behaviours this member runs: one ROS 2 action each, in the member's namespace.
 BEHAVIOURS: dict[str, BehaviourSpec] = {
     "MoveTo": BehaviourSpec(
@@ -67,7 +72,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "data.target_pose",
         "json",
-        None,
+        {"x": 0.0, "y": 0.0, "z": 0.0},
         data="target_pose",
         description="member data target_pose (Pose)",
     ),
@@ -222,8 +227,8 @@ PARAMETERS: tuple[Parameter, ...] = (
 
 def _action_1(ctx: Context) -> None:
     d = ctx.data
-    d["target_id"] = ctx.event_data.get("target_id")
-    d["target_pose"] = ctx.event_data.get("pose")
+    d["target_id"] = ctx.field("target_id")
+    d["target_pose"] = ctx.field("pose")
 
 
 def _args_2(ctx: Context) -> dict[str, Any]:
@@ -243,7 +248,11 @@ def _args_4(ctx: Context) -> dict[str, Any]:
 
 def build() -> Chart:
     """The statechart of member type UGV, ready for the engine."""
-    b = ChartBuilder(CHART_NAME, data={"maxSpeed": 0.5, "target_id": 0, "target_pose": None})
+    b = ChartBuilder(
+        CHART_NAME,
+        data={"maxSpeed": 0.5, "target_id": 0, "target_pose": {"x": 0.0, "y": 0.0, "z": 0.0}},
+        events=EVENT_FIELDS,
+    )
     b.node("Operating", "state", None, name="Operating")
     b.initial("Operating", ("Idle",))
     b.node("Idle", "state", "Operating", name="Idle")
@@ -255,7 +264,9 @@ def build() -> Chart:
         "state",
         "Operating",
         name="Bidding",
-        call=Call("TaskBidding", "SwarmFunction", _args_2, ()),
+        call=Call(
+            "TaskBidding", "SwarmFunction", _args_2, (), ("succeeded", "aborted", "preempted")
+        ),
     )
     b.transition("Bidding", ("outcome.Bidding.succeeded",), ("MoveToTarget",))
     b.transition("Bidding", ("outcome.Bidding.aborted",), ("Ready",))
@@ -264,7 +275,7 @@ def build() -> Chart:
         "state",
         "Operating",
         name="MoveToTarget",
-        call=Call("MoveTo", "HardwareFunction", _args_3, ()),
+        call=Call("MoveTo", "HardwareFunction", _args_3, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition("MoveToTarget", ("outcome.MoveToTarget.succeeded",), ("Rescuing",))
     b.transition("MoveToTarget", ("outcome.MoveToTarget.aborted",), ("Ready",))
@@ -273,7 +284,7 @@ def build() -> Chart:
         "state",
         "Operating",
         name="Rescuing",
-        call=Call("Rescue", "ComplexBehavior", _args_4, ()),
+        call=Call("Rescue", "ComplexBehavior", _args_4, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition("Rescuing", ("outcome.Rescuing.succeeded",), ("Ready",))
     b.transition("Rescuing", ("outcome.Rescuing.aborted",), ("Ready",))

@@ -153,8 +153,8 @@ class Behaviour:
     `input_keys` are inputs read from userdata keys of the same name (`remapping` on `add` maps
     them to other member data); `goal_cb(ctx) -> {input: value}` computes the other inputs from
     expressions. `output_keys` are the outputs and, through `remapping`, the member data they go
-    to; the outcome transitions write them back (`ctx.write_back` in their actions), so outputs
-    are kept when an outcome is taken, not when the behaviour is preempted.
+    to; they are written when the behaviour ends, before its outcome is matched (the chart's
+    finalize transition, docs/semantics.md), and not when the behaviour is preempted.
     """
 
     __slots__ = ("behaviour", "goal_cb", "input_keys", "kind", "outcomes", "output_keys")
@@ -188,7 +188,7 @@ class Behaviour:
             return values
 
         results = tuple((key, remapping.get(key, key)) for key in self.output_keys)
-        return Call(self.behaviour, self.kind, args, results)
+        return Call(self.behaviour, self.kind, args, results, tuple(self.outcomes))
 
 
 @dataclass(eq=False, slots=True)
@@ -429,11 +429,14 @@ class Container(State):
 
     # --- execution (the top container)
 
-    def build_chart(self, name: str) -> Chart:
-        """The statechart these containers describe, as the engine runs it."""
+    def build_chart(
+        self, name: str, events: Mapping[str, Mapping[str, Any]] | None = None
+    ) -> Chart:
+        """The statechart these containers describe, as the engine runs it; `events`: each
+        event's fields with the value a sender that leaves one out gives it."""
         if self._entry is not None:
             raise ValueError("build_chart() is called on the top container")
-        return _Compiler(self).chart(name)
+        return _Compiler(self).chart(name, events)
 
     async def execute_async(
         self,
@@ -659,7 +662,7 @@ class _Compiler:
         self.top = top
         self.builder = ChartBuilder("")
 
-    def chart(self, name: str) -> Chart:
+    def chart(self, name: str, events: Mapping[str, Mapping[str, Any]] | None = None) -> Chart:
         top = self.top
         for container in self._containers(top):
             if container is not top and len(container.userdata):
@@ -667,7 +670,7 @@ class _Compiler:
                     f"{container.label}: member data lives in the top container's userdata"
                 )
             self._check_outcomes(container)
-        self.builder = ChartBuilder(name, data=dict(top.userdata._data))
+        self.builder = ChartBuilder(name, data=dict(top.userdata._data), events=events)
         for entry in top._entries:
             self._emit(entry, None)
         self.builder.initial(None, self._initial_targets(top))

@@ -15,9 +15,9 @@ The rules follow `runtime.replay` exactly, so the traces equal the other backend
 - a `complete` whose goal is no longer running (it already ended, or it was cancelled in the
   same burst) delivers the outcome event directly, tagged with the activation it was resolved
   against, as the asyncio replay does;
-- a ROS result carries every output: outputs a `complete` step leaves out are filled with the
-  member's current value of the data they are written to (so the write-back changes nothing),
-  or with the field's zero value when no data takes them; JSON outputs are left empty (absent).
+- a ROS result carries every output: outputs a `complete` step leaves out hold the field's zero
+  value, which is what every backend writes for an output a behaviour does not give (the value
+  rule, docs/semantics.md); JSON outputs are left empty (absent: the zero of their type).
 
 One JSON line per scenario is printed: `{"scenario": n, "trace": [...], "stats": {...}}`; the
 stats count (cumulatively) the goals the servers executed, the outcomes that came back as ROS
@@ -236,17 +236,11 @@ class Replay:
         node = self.member.engine.chart.nodes[state]
         assert node.call is not None
         behaviour = self.spec.behaviours[node.call.behaviour]
-        written = dict(node.call.results)
-        fields = {}
-        for output in behaviour.outputs:
-            if output.name in outputs:
-                value = outputs[output.name]
-            elif output.type == "json":
-                continue
-            else:
-                value = self.member.engine.data.get(written.get(output.name, ""))
-            fields[output.field] = encode(output.type, value)
-        return fields
+        return {
+            output.field: encode(output.type, outputs[output.name])
+            for output in behaviour.outputs
+            if output.name in outputs
+        }
 
     def _record(self, number: int, step: Step | None) -> dict[str, Any]:
         return {
@@ -254,6 +248,7 @@ class Replay:
             "input": describe(step) if step is not None else None,
             "active": self.member.active(),
             "data": json.loads(json.dumps(self.member.engine.data, default=str)),
+            "errors": self.member.engine.error_count,
         }
 
 

@@ -19,7 +19,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from .chart import Call, Chart, Node
-from .engine import OUTCOME_PREFIX
+from .engine import FINALIZE_PREFIX
 from .member import Member, Outcome, Request
 
 Step = Mapping[str, Any]
@@ -138,11 +138,12 @@ def _record(number: int, step: Step | None, member: Member) -> dict[str, Any]:
         "input": describe(step) if step is not None else None,
         "active": member.active,
         "data": json.loads(json.dumps(member.engine.data, default=str)),
+        "errors": member.engine.error_count,  # error.execution so far (docs/semantics.md)
     }
 
 
 def outcome_event(node: Node, outcome: str) -> str:
-    return f"{OUTCOME_PREFIX}{node.id}.{outcome}"
+    return f"{FINALIZE_PREFIX}{node.id}.{outcome}"
 
 
 __all__ = ["Call", "describe", "expand", "outcome_event", "replay_async", "running_state"]
