@@ -36,15 +36,17 @@ def update_golden(request: pytest.FixtureRequest) -> bool:
 
 
 def xmi_sample_files() -> list[Path]:
+    """The reference XMI files in ../shared (none in a user's clone: the tests over them are
+    then reported as skipped, pytest's rule for an empty parameter set)."""
+    if not XMI_SAMPLES.is_dir():
+        return []
     return sorted(p for p in XMI_SAMPLES.iterdir() if p.suffix in {".xmi", ".uml"})
 
 
 @pytest.fixture(scope="session")
 def scxml_schema() -> xmlschema.XMLSchema:
     if not (SCXML_XSD / "scxml.xsd").is_file():
-        pytest.fail(
-            f"the W3C SCXML schema is missing: {SCXML_XSD} (../shared must be beside the repo)"
-        )
+        pytest.skip(f"the W3C SCXML schema is not beside this clone: {SCXML_XSD}")
     return xmlschema.XMLSchema(
         str(SCXML_XSD / "scxml.xsd"),
         uri_mapper={"http://www.w3.org/2001/xml.xsd": str(SCXML_XSD / "xml.xsd")},
