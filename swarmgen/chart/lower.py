@@ -550,8 +550,7 @@ class _Lowering:
         itself carries no data, so that it stays an internal event in every engine)."""
         if not isinstance(source, State) or source.activity is None:
             return {}
-        prefix = f"outcome.{sid}"
-        if not any(e == prefix or e.startswith(prefix + ".") for e in events):
+        if not c.takes_outcome(events, sid):
             return {}
         behaviour = self.index.behaviours[source.activity.behaviour]
         return {p.name: p.name for p in behaviour.outputs if p.name in self.data}

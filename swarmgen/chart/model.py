@@ -99,6 +99,13 @@ class Transition:
     join: str | None = None  # the join pseudostate this transition stands for
 
 
+def takes_outcome(events: tuple[str, ...], state_id: str) -> bool:
+    """Whether a transition with these descriptors is taken by an outcome of the behaviour of
+    `state_id` (`outcome.<id>` for any outcome, `outcome.<id>.<outcome>` for one)."""
+    prefix = f"outcome.{state_id}"
+    return any(e == prefix or e.startswith(prefix + ".") for e in events)
+
+
 @dataclass(frozen=True, slots=True)
 class Node:
     id: str

@@ -129,12 +129,9 @@ def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
 def _outputs_written(owner: c.Node, transition: c.Transition) -> set[str]:
     """A transition on the outcome of the owner's behaviour leaves with its outputs written
     (they are written when the behaviour ends, before the outcome is matched)."""
-    if owner.call is None:
+    if owner.call is None or not c.takes_outcome(transition.events, owner.id):
         return set()
-    prefix = f"outcome.{owner.id}"
-    if any(e == prefix or e.startswith(prefix + ".") for e in transition.events):
-        return {location for _, location in owner.call.results}
-    return set()
+    return {location for _, location in owner.call.results}
 
 
 def _spans(model: Model) -> dict[str, Span]:

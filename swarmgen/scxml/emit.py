@@ -235,13 +235,19 @@ class _Writer:
         One transition per declared outcome (`<raise>` names its event statically), and one
         for any other outcome, which only writes the outputs."""
         prefix = f"{FINALIZE_PREFIX}{node_id}"
+        writes = [
+            (
+                location,
+                f"$sg.value(_event.data, {expr.js_string(output)}, "
+                f"{js_literal(zero_like(self.data[location].initial))})",
+            )
+            for output, location in call.results
+        ]
         for outcome in (*call.outcomes, None):
             event = prefix if outcome is None else f"{prefix}.{outcome}"
             transition = _sub(element, "transition", {"event": event})
             transition.set(_sg("finalize"), call.behaviour)
-            for output, location in call.results:
-                zero = js_literal(zero_like(self.data[location].initial))
-                value = f"$sg.value(_event.data, {expr.js_string(output)}, {zero})"
+            for location, value in writes:
                 _sub(transition, "assign", {"location": location, "expr": value})
             if outcome is not None:
                 _sub(transition, "raise", {"event": f"{OUTCOME_PREFIX}{node_id}.{outcome}"})

@@ -47,32 +47,30 @@ class _Document:
     (document order) and the declared fields of each event with their defaults."""
 
     def __init__(self, path: str) -> None:
-        self.data, self.calls, self.fields = _document(path)
+        import xml.etree.ElementTree as ET
+
+        root = ET.parse(path).getroot()
+        self.data = sorted(e.get("id", "") for e in root.iter(f"{SCXML}data"))
+        self.calls = _calls(root)
+        self.fields: dict[str, dict[str, Any]] = {}
+        for event in root.iter(f"{SG}event"):
+            defaults = {
+                f.get("name", ""): json.loads(f.get("default", "null"))
+                for f in event.findall(f"{SG}field")
+                if f.get("default") is not None
+            }
+            if defaults:
+                self.fields[event.get("id", "")] = defaults
 
 
-def _document(
-    path: str,
-) -> tuple[list[str], list[tuple[str, str]], dict[str, dict[str, Any]]]:
-    import xml.etree.ElementTree as ET
-
-    root = ET.parse(path).getroot()
-    data = sorted(e.get("id", "") for e in root.iter(f"{SCXML}data"))
-    fields: dict[str, dict[str, Any]] = {}
-    for event in root.iter(f"{SG}event"):
-        defaults = {
-            f.get("name", ""): json.loads(f.get("default", "null"))
-            for f in event.findall(f"{SG}field")
-            if f.get("default") is not None
-        }
-        if defaults:
-            fields[event.get("id", "")] = defaults
+def _calls(root: Any) -> list[tuple[str, str]]:
     calls = []
     for element in root.iter():
         if element.tag in (f"{SCXML}state", f"{SCXML}parallel"):
             for onentry in element.findall(f"{SCXML}onentry"):
                 for call in onentry.findall(f"{SG}call"):
                     calls.append((element.get("id", ""), call.get("behaviour", "")))
-    return data, calls, fields
+    return calls
 
 
 def _fill(value: Any, template: Any) -> Any:
