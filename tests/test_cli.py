@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from swarmgen import pipeline
-from tests.conftest import ROOT, SAMPLE_MODELS, run_cli
+from tests.conftest import ROOT, SAMPLE_MODELS, XMI_SAMPLES, requires_shared, run_cli
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 
@@ -157,8 +157,12 @@ def test_every_diagnostic_code_is_documented() -> None:
     assert not missing, f"add these codes to docs/diagnostics.md: {missing}"
 
 
+TIMERS_SAMPLE = str(XMI_SAMPLES / "papyrus_spring-sm_simple-timers.uml")
+
+
+@requires_shared
 def test_sarif_output() -> None:
-    sample = "../shared/reference/xmi_samples/papyrus_spring-sm_simple-timers.uml"
+    sample = TIMERS_SAMPLE
     result = run_cli("validate", sample, "--format", "sarif")
     assert result.returncode == 0
     log = json.loads(result.stdout)
@@ -177,8 +181,9 @@ def test_sarif_output() -> None:
         assert region["startLine"] > 0 and region["startColumn"] > 0
 
 
+@requires_shared
 def test_strict_and_disable() -> None:
-    sample = "../shared/reference/xmi_samples/papyrus_spring-sm_simple-timers.uml"
+    sample = TIMERS_SAMPLE
     assert run_cli("validate", sample).returncode == 0  # two warnings
     strict = run_cli("validate", sample, "--strict")
     assert strict.returncode == 1 and ": error: " in strict.stdout
@@ -187,8 +192,9 @@ def test_strict_and_disable() -> None:
     assert run_cli("validate", sample, "--disable", "SG999").returncode == 2
 
 
+@requires_shared
 def test_strict_compile_writes_nothing(tmp_path: Path) -> None:
-    sample = "../shared/reference/xmi_samples/papyrus_spring-sm_simple-timers.uml"
+    sample = TIMERS_SAMPLE
     result = run_cli("compile", sample, "-o", str(tmp_path / "out"), "--strict")
     assert result.returncode == 1
     assert not (tmp_path / "out").exists()

@@ -15,7 +15,14 @@ from swarmgen import pipeline
 from swarmgen.diagnostics import Severity
 from swarmgen.ir.nodes import FinalState, Model, Pseudostate, State
 from swarmgen.ir.query import walk
-from tests.conftest import SAMPLE_MODELS, XMI_SAMPLES, qt_load, xmi_sample_files
+from tests.conftest import (
+    HAS_SHARED,
+    SAMPLE_MODELS,
+    XMI_SAMPLES,
+    qt_load,
+    requires_shared,
+    xmi_sample_files,
+)
 
 
 @dataclass(frozen=True)
@@ -77,10 +84,12 @@ def _counts(model: Model) -> Counts:
     )
 
 
+@requires_shared
 def test_every_reference_file_is_covered() -> None:
     assert sorted(EXPECTED) == sorted(p.name for p in xmi_sample_files())
 
 
+@requires_shared
 @pytest.mark.parametrize("name", sorted(EXPECTED))
 def test_reference_file_loads_with_readme_counts(name: str) -> None:
     result = pipeline.validate(XMI_SAMPLES / name)
@@ -90,6 +99,7 @@ def test_reference_file_loads_with_readme_counts(name: str) -> None:
     assert _counts(result.model) == EXPECTED[name]
 
 
+@requires_shared
 def test_spans_point_at_the_element() -> None:
     """Every IR node keeps file, line, column and xmi:id of its XMI element."""
     path = XMI_SAMPLES / "emfuml4_hets_atm.xmi"
@@ -121,7 +131,7 @@ def emitted(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
                 target = out / f"{model.stem}__{relative.name}"
                 target.write_text(text, encoding="utf-8")
                 paths.append(target)
-    assert len(paths) >= 10
+    assert len(paths) >= (10 if HAS_SHARED else 4)  # the samples give 4 documents
     return paths
 
 

@@ -309,16 +309,6 @@ def models(draw: st.DrawFn) -> ModelKit:
     return kit
 
 
-@pytest.fixture(scope="module")
-def schema() -> xmlschema.XMLSchema:
-    from tests.conftest import SCXML_XSD
-
-    return xmlschema.XMLSchema(
-        str(SCXML_XSD / "scxml.xsd"),
-        uri_mapper={"http://www.w3.org/2001/xml.xsd": str(SCXML_XSD / "xml.xsd")},
-    )
-
-
 @settings(
     max_examples=12,
     deadline=None,
@@ -326,7 +316,7 @@ def schema() -> xmlschema.XMLSchema:
 )
 @given(kit=models())
 def test_random_models_compile_validate_import_and_are_stable(
-    kit: ModelKit, tmp_path: Path, schema: xmlschema.XMLSchema
+    kit: ModelKit, tmp_path: Path, scxml_schema: xmlschema.XMLSchema
 ) -> None:
     path = tmp_path / "random.xmi"
     path.write_text(kit.xmi(), encoding="utf-8")
@@ -336,7 +326,7 @@ def test_random_models_compile_validate_import_and_are_stable(
     assert first.files == pipeline.compile_model(path, backends=["asyncio"]).files  # same bytes
     for relative, text in first.files.items():
         if relative.suffix == ".scxml":
-            schema.validate(text)
+            scxml_schema.validate(text)
     out = tmp_path / "out"
     pipeline.write_tree(first.files, out)
     package = next((out / "asyncio").iterdir())

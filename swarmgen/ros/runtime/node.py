@@ -699,12 +699,21 @@ def spin_until(
     timeout: float | None = None,
     step: float = 0.1,
 ) -> bool:
-    """Spin in this thread until `done()` or the timeout; False on timeout."""
+    """Spin in this thread until `done()` or the timeout; False on timeout.
+
+    A SIGINT/SIGTERM shuts the context down from rclpy's signal handler, possibly between two
+    `spin_once` calls: the next one then fails inside rcl ("context is not valid") instead of
+    raising ExternalShutdownException. Both are the same clean shutdown to every caller."""
     deadline = None if timeout is None else time.monotonic() + timeout
     while not done():
         if deadline is not None and time.monotonic() > deadline:
             return False
-        executor.spin_once(timeout_sec=step)
+        try:
+            executor.spin_once(timeout_sec=step)
+        except Exception:
+            if executor.context.ok():
+                raise
+            raise ExternalShutdownException() from None
     return True
 
 
