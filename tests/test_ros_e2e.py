@@ -10,6 +10,7 @@ talks to the swarm over DDS only: it publishes the station events and records ev
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -176,6 +177,11 @@ def _finish(proc: subprocess.Popen[str], limit: float) -> tuple[int, str, str]:
     try:
         stdout, stderr = proc.communicate(timeout=limit)
     except subprocess.TimeoutExpired:
+        # `timeout` itself and what it runs: killing only `timeout` would orphan the python
+        # process, which keeps the pipes open and `communicate()` waiting forever
+        with contextlib.suppress(psutil.NoSuchProcess):
+            for child in psutil.Process(proc.pid).children(recursive=True):
+                child.kill()
         proc.kill()
         stdout, stderr = proc.communicate()
     return proc.returncode, stdout, stderr
