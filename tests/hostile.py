@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-SAMPLE = ROOT / "sample_models" / "search_and_rescue" / "search_and_rescue.xmi"
+SAMPLE = ROOT / "sample_models" / "sar" / "sar.xmi"
 CLEAN_EXITS = (0, 1, 2)
 
 
