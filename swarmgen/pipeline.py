@@ -7,17 +7,13 @@ from __future__ import annotations
 
 import difflib
 import gc
-import hashlib
 import json
-import os
-import shutil
-import tempfile
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path, PurePosixPath
 
-from swarmgen import __version__, check, graph
+from swarmgen import __version__, check, graph, outtree
 from swarmgen import diagnostics as dg
 from swarmgen.backends import registry
 from swarmgen.chart.lower import lower
@@ -28,7 +24,8 @@ from swarmgen.ir.nodes import Model
 from swarmgen.render import render
 from swarmgen.scxml.emit import ScxmlDocument, serialize
 
-MANIFEST = ".swarmgen.json"
+MANIFEST = outtree.MANIFEST
+OutputError = outtree.OutputError
 Files = dict[PurePosixPath, str]
 
 
@@ -101,7 +98,7 @@ def _compile(path: Path, backends: Sequence[str] | None) -> Compilation:
         for relative, text in graph.files(validation.model, "mermaid").items():
             files[PurePosixPath("diagrams") / relative] = text
     files[PurePosixPath("README.md")] = _output_readme(validation.model, path, documents)
-    files[PurePosixPath(MANIFEST)] = _manifest(path, files)
+    files[PurePosixPath(MANIFEST)] = _manifest("compile", path, files)
     return Compilation(validation, files)
 
 
@@ -114,7 +111,7 @@ def graph_model(path: Path, fmt: str = "mermaid", member: str | None = None) -> 
         if validation.model is None or dg.has_errors(validation.diagnostics):
             return Compilation(validation, {})
         files = graph.files(validation.model, fmt, member)
-        files[PurePosixPath(MANIFEST)] = _manifest(path, files)
+        files[PurePosixPath(MANIFEST)] = _manifest("graph", path, files)
         return Compilation(validation, files)
 
 
@@ -151,89 +148,34 @@ def _output_readme(model: Model, source: Path, documents: tuple[ScxmlDocument, .
     )
 
 
-def _manifest(source: Path, files: Mapping[PurePosixPath, str]) -> str:
-    digests = {str(p): hashlib.sha256(t.encode()).hexdigest() for p, t in sorted(files.items())}
-    payload = {
-        "generator": "swarmgen",
-        "version": __version__,
-        "source": source.name,
-        "files": digests,
-    }
-    return json.dumps(payload, indent=2, sort_keys=True) + "\n"
-
-
-class OutputError(Exception):
-    """The output directory cannot be written safely."""
+def _manifest(command: str, source: Path, files: Mapping[PurePosixPath, str]) -> str:
+    return outtree.manifest_text(command, source.name, files)
 
 
 def write_tree(files: Files, out_dir: Path) -> None:
-    """Replace `out_dir` with exactly `files`, atomically: a temporary sibling, then renames.
-
-    A directory we did not create (no manifest) is never replaced, so `-o .` cannot wipe a
-    project; paths are checked to stay inside the output directory.
-    """
-    out_dir = out_dir.absolute()
-    _check_replaceable(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
-    try:
-        for relative, text in sorted(files.items()):
-            target = (staging / relative).resolve()
-            if not target.is_relative_to(staging.resolve()):
-                raise OutputError(f"refusing to write outside the output directory: {relative}")
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(text.encode("utf-8"))
-        _swap(staging, out_dir)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
-
-
-def _check_replaceable(out_dir: Path) -> None:
-    if not out_dir.exists():
-        return
-    if not out_dir.is_dir():
-        raise OutputError(f"{out_dir} exists and is not a directory")
-    if any(out_dir.iterdir()) and not (out_dir / MANIFEST).is_file():
-        raise OutputError(
-            f"{out_dir} is not empty and was not written by swarmgen (no {MANIFEST}); "
-            "choose an empty or new directory"
-        )
-
-
-def _swap(staging: Path, out_dir: Path) -> None:
-    if not out_dir.exists():
-        os.replace(staging, out_dir)
-        return
-    retired = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.old.", dir=out_dir.parent))
-    os.replace(out_dir, retired / "tree")
-    os.replace(staging, out_dir)
-    shutil.rmtree(retired, ignore_errors=True)
+    """Make `out_dir` hold `files` (with their manifest), under the rules of `swarmgen.outtree`:
+    only swarmgen's own, unedited files are replaced or removed; the swap is crash-safe."""
+    outtree.write(files, out_dir)
 
 
 def diff_tree(files: Files, out_dir: Path) -> str:
-    """Unified diff between what would be generated and what `out_dir` holds ('' if equal)."""
-    on_disk: dict[PurePosixPath, str] = {}
-    if out_dir.is_dir():
-        for path in sorted(out_dir.rglob("*")):
-            if path.is_file():
-                on_disk[PurePosixPath(path.relative_to(out_dir).as_posix())] = path.read_text(
-                    encoding="utf-8", errors="replace"
-                )
+    """Unified diff between what would be generated and what `out_dir` holds of swarmgen's
+    ('' if equal); files swarmgen did not write are not compared (a compile keeps them)."""
     chunks: list[str] = []
-    for relative in sorted(set(files) | set(on_disk)):
-        old, new = on_disk.get(relative), files.get(relative)
-        if old == new:
-            continue
+    for relative, old, new in outtree.diff_pairs(files, out_dir):
         chunks.extend(
             difflib.unified_diff(
-                (old or "").splitlines(keepends=True),
-                (new or "").splitlines(keepends=True),
+                _lines(old),
+                _lines(new),
                 fromfile=f"a/{relative}" if old is not None else "/dev/null",
                 tofile=f"b/{relative}" if new is not None else "/dev/null",
             )
         )
     return "".join(chunks)
+
+
+def _lines(content: bytes | None) -> list[str]:
+    return (content or b"").decode("utf-8", errors="replace").splitlines(keepends=True)
 
 
 def ir_schema() -> str:

@@ -83,11 +83,15 @@ def test_compile_writes_tree_and_check_detects_drift(tmp_path: Path) -> None:
     lines = stale.stdout.splitlines()
     assert any(line.startswith("-") and '<state id="Hovering"' in line for line in lines)
     assert any(line.startswith("+") and '<state id="Loitering"' in line for line in lines)
-    assert "b/scxml/extra.scxml" not in stale.stdout and "a/scxml/extra.scxml" in stale.stdout
+    assert "extra.scxml" not in stale.stdout  # a file swarmgen did not write is not compared
     assert 'id="Hovering"' in uav.read_text()  # --check writes nothing
 
+    refused = run_cli("compile", str(SAR), "-o", str(out))  # an edited file is not overwritten
+    assert refused.returncode == 2 and "scxml/UAV.scxml" in refused.stderr, refused.stderr
+    assert 'id="Hovering"' in uav.read_text()
+    uav.unlink()
     assert run_cli("compile", str(SAR), "-o", str(out)).returncode == 0
-    assert not (out / "scxml" / "extra.scxml").exists()
+    assert (out / "scxml" / "extra.scxml").read_text() == "<scxml/>"  # the user's file is kept
     assert 'id="Hovering"' not in uav.read_text()
 
 

@@ -7,12 +7,7 @@ Every string that comes from the model is printed with `repr()`, so it stays a s
 from __future__ import annotations
 
 import functools
-import hashlib
-import importlib.metadata
-import os
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import black
@@ -22,46 +17,16 @@ from swarmgen.chart import model as c
 from swarmgen.ir import expr
 from swarmgen.names import identifier
 
-BLACK_VERSION = importlib.metadata.version("black")
 BLACK_MODE = black.Mode(line_length=100, target_versions={TargetVersion.PY311})
 
 
 @functools.lru_cache(maxsize=1024)
 def format_python(source: str) -> str:
-    """black, pinned (its output is in golden files and generated/). Memoised in process and on
-    disk: black is the slowest step of compiling, and the same sources recur (`--check` after a
-    write, CI, tests). The cache key is the source and black's version, so a hit is exactly what
-    black would print."""
-    key = hashlib.sha256(f"{BLACK_VERSION}\0{BLACK_MODE!r}\0{source}".encode()).hexdigest()
-    cached = _cache_path(key)
-    if cached is not None:
-        try:
-            return cached.read_text(encoding="utf-8")
-        except OSError:
-            pass
-    formatted = black.format_str(source, mode=BLACK_MODE)
-    if cached is not None:
-        _store(cached, formatted)
-    return formatted
-
-
-def _cache_path(key: str) -> Path | None:
-    if os.environ.get("SWARMGEN_NO_CACHE"):
-        return None
-    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-    return Path(base) / "swarmgen" / "black" / key[:2] / key
-
-
-def _store(path: Path, text: str) -> None:
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(
-            "w", encoding="utf-8", dir=path.parent, delete=False
-        ) as handle:
-            handle.write(text)
-        os.replace(handle.name, path)
-    except OSError:
-        pass  # a read-only home: no cache, same output
+    """black, pinned (its output is in golden files and generated/). Memoised in this process
+    only: an on-disk cache under the user's cache directory would let whoever can write there
+    choose the bytes swarmgen emits, and generated code must be a function of the model and
+    swarmgen's version alone (docs/security.md)."""
+    return black.format_str(source, mode=BLACK_MODE)
 
 
 @dataclass(frozen=True)

@@ -34,11 +34,12 @@ from collections import deque
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from swarmgen import outtree
 from swarmgen.runtime.chart import Call, Chart, Node
 from swarmgen.runtime.engine import FINALIZE_PREFIX, OUTCOME_PREFIX, Event
 from swarmgen.runtime.member import Behaviour, InMemoryBus, Member, Request
@@ -725,34 +726,12 @@ def outputs(sim: Simulation) -> dict[str, bytes]:
     return files
 
 
-def write_outputs(files: Mapping[str, bytes], out_dir: Path) -> None:
-    """Replace `out_dir` with exactly `files`, atomically, under the rules of
-    `pipeline.write_tree` (a non-empty directory swarmgen did not write is never replaced)."""
-    import json
-    import shutil
-    import tempfile
-
-    from swarmgen import __version__, pipeline
-
-    out_dir = out_dir.absolute()
-    pipeline._check_replaceable(out_dir)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    manifest = {
-        "generator": "swarmgen simulate",
-        "version": __version__,
-        "files": {name: hashlib.sha256(data).hexdigest() for name, data in sorted(files.items())},
-    }
-    staging = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
-    try:
-        for name, data in sorted(files.items()):
-            (staging / name).write_bytes(data)
-        (staging / pipeline.MANIFEST).write_text(
-            json.dumps(manifest, indent=2, sort_keys=True) + "\n", encoding="utf-8"
-        )
-        pipeline._swap(staging, out_dir)
-    except BaseException:
-        shutil.rmtree(staging, ignore_errors=True)
-        raise
+def write_outputs(files: Mapping[str, bytes], out_dir: Path, source: str) -> None:
+    """Make `out_dir` hold exactly `files` and their manifest, under the rules of
+    `swarmgen.outtree` (only swarmgen's own unedited files are replaced; crash-safe)."""
+    tree: dict[PurePosixPath, str | bytes] = {PurePosixPath(n): d for n, d in files.items()}
+    tree[PurePosixPath(outtree.MANIFEST)] = outtree.manifest_text("simulate", source, tree)
+    outtree.write(tree, out_dir)
 
 
 def simulate_model(
@@ -766,11 +745,13 @@ def simulate_model(
 ) -> tuple[Simulation, dict[str, bytes]]:
     """`swarmgen simulate`: compile MODEL, run the scenario's sweep, write the results (and with
     `record`, one bag per run into that new directory)."""
+    if out_dir is not None:
+        outtree.preflight(out_dir, "simulate")  # a bad -o is refused before the runs, not after
     machines = compile_machines(model)
     sim = simulate(
         machines, scenario, workers=workers, progress=progress, record=record, storage=storage
     )
     files = outputs(sim)
     if out_dir is not None:
-        write_outputs(files, out_dir)
+        write_outputs(files, out_dir, model.name)
     return sim, files
