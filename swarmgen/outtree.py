@@ -300,6 +300,8 @@ def preflight(out_dir: Path, command: str) -> Path:
         target = target_of(out_dir)
         _clear_debris(target)
         inspect(target, command)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        os.rmdir(tempfile.mkdtemp(prefix=_staging_prefix(target), dir=target.parent))  # writable?
         return target
 
 

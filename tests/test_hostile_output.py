@@ -292,8 +292,9 @@ def test_an_output_path_that_cannot_be_used_is_refused_cleanly(
     out = BAD_OUTPUTS[case](work)
     before = snapshot(work)
     extra = {"compile": ["--backend", "scxml"], "graph": [], "simulate": ["--reps", "1"]}
-    outcome = swarmgen(command, SMALL, "-o", out, *extra[command], cwd=work, timeout=60)
-    assert_refused(outcome, exit=2)
+    model = SAMPLE if command == "simulate" else SMALL  # simulate's scenarios name SAR's types
+    outcome = swarmgen(command, model, "-o", out, *extra[command], cwd=work, timeout=60)
+    assert_refused(outcome, exit=2, says=out.name)
     assert snapshot(work) == before  # no debris either
 
 
@@ -439,3 +440,32 @@ def test_a_kill_at_any_step_loses_nothing_and_the_next_run_recovers(
         assert _contents(out) == {**NEW, **user}, f"killed at step {kill_at}"
         assert sorted(p.name for p in case.iterdir()) == ["out"], f"debris after {kill_at}"
     assert steps > 0 and killed_at == steps, "every step was interrupted once"
+
+
+def _immutable(path: Path) -> bool:
+    """Make `path` unwritable even for root (ext4's immutable flag); False where that cannot be
+    done (no chattr, another file system, no privilege)."""
+    chattr = shutil.which("chattr")
+    return (
+        bool(chattr)
+        and subprocess.run([chattr, "+i", str(path)], capture_output=True).returncode == 0
+    )
+
+
+@pytest.mark.parametrize("command", ["compile", "simulate"])
+def test_an_unwritable_parent_is_one_clear_line(tmp_path: Path, command: str) -> None:
+    parent = tmp_path / "locked"
+    parent.mkdir()
+    if os.geteuid() != 0:
+        parent.chmod(0o555)
+    elif not _immutable(parent):
+        pytest.skip("no way to make a directory unwritable for root here")
+    try:
+        extra = ["--backend", "scxml"] if command == "compile" else ["--reps", "1"]
+        model = SAMPLE if command == "simulate" else SMALL
+        outcome = swarmgen(command, model, "-o", parent / "out", *extra, cwd=tmp_path, timeout=60)
+    finally:
+        subprocess.run(["chattr", "-i", str(parent)], capture_output=True, check=False)
+        parent.chmod(0o755)
+    assert_refused(outcome, exit=2, says="cannot write")
+    assert list(parent.iterdir()) == []
