@@ -64,6 +64,7 @@ from .node import (
     Scheduler,
     decode,
     encode,
+    fits,
     ros_args,
     ros_time,
     spin_until,
@@ -79,14 +80,34 @@ class ScriptError(ValueError):
 # --- safe expressions
 
 
+MAX_POWER = 1024  # |exponent| of `**` on integers; `2 ** 10 ** 9` would block the executor
+MAX_REPEAT = 100_000  # items a repeated string or list may have (`"x" * 10 ** 12`)
+
+
+def _pow(base: Any, exponent: Any) -> Any:
+    if isinstance(exponent, int) and isinstance(base, int) and abs(exponent) > MAX_POWER:
+        raise ValueError(f"integer exponent {exponent} is above {MAX_POWER}")
+    return operator.pow(base, exponent)
+
+
+def _mul(left: Any, right: Any) -> Any:
+    for sequence, count in ((left, right), (right, left)):
+        repeated = isinstance(sequence, str | list | tuple) and isinstance(count, int)
+        if repeated and len(sequence) * count > MAX_REPEAT:
+            raise ValueError(f"a repetition of more than {MAX_REPEAT} items")
+    return operator.mul(left, right)
+
+
+# Scripts come from files a user edits: their expressions are bounded, so that a typo cannot
+# keep the executor (every member of the process) busy or exhaust its memory.
 _BINARY: dict[type[ast.operator], Callable[[Any, Any], Any]] = {
     ast.Add: operator.add,
     ast.Sub: operator.sub,
-    ast.Mult: operator.mul,
+    ast.Mult: _mul,
     ast.Div: operator.truediv,
     ast.FloorDiv: operator.floordiv,
     ast.Mod: operator.mod,
-    ast.Pow: operator.pow,
+    ast.Pow: _pow,
 }
 _COMPARE: dict[type[ast.cmpop], Callable[[Any, Any], Any]] = {
     ast.Eq: operator.eq,
@@ -485,6 +506,7 @@ class SimulatedBehaviours(Node):
         self.interfaces = Interfaces(self.spec.interfaces)
         self.scheduler = scheduler or Scheduler(self)
         self.started: list[tuple[str, str]] = []  # (behaviour, "started" | outcome)
+        self.errors: list[str] = []  # script failures (each aborted a goal or an emission)
         self._ids = itertools.count(EMITTED_ID_BASE)
         self._counts: dict[str, int] = {}
         self._goals: dict[bytes, _Goal] = {}
@@ -506,6 +528,16 @@ class SimulatedBehaviours(Node):
         ]
 
     def _accepted(self, behaviour: BehaviourSpec, handle: Any) -> None:
+        """A goal starts; if starting it fails, it is aborted (an exception here would leave
+        rclpy's executor, and stop every node of the process)."""
+        try:
+            self._start(behaviour, handle)
+        except Exception as err:
+            self._failed(f"{behaviour.name}: the goal could not start: {err!r}")
+            goal = self._goals.get(bytes(handle.goal_id.uuid)) or _Goal(handle, behaviour, {})
+            self._finish(goal, Ending(outcome="aborted"))
+
+    def _start(self, behaviour: BehaviourSpec, handle: Any) -> None:
         """A goal starts: its end is scheduled (duration, `until`), its emissions too."""
         action = self.interfaces.action(behaviour.action)
         script = self.scripts.get(behaviour.name) or Script(forever=True)
@@ -553,17 +585,20 @@ class SimulatedBehaviours(Node):
         try:
             outcome = str(render(ending.outcome, goal.names))
             outputs = render(dict(ending.outputs), goal.names)
+            result = action.Result(outcome=outcome)
+            for output in behaviour.outputs:
+                value = outputs.get(output.name)
+                if not fits(output.type, value):  # the wrong type: a failing behaviour
+                    raise ValueError(f"output {output.name}: {value!r} is not a {output.type}")
+                if output.name in outputs:
+                    setattr(result, output.field, encode(output.type, value))
             for emission in ending.emit:
                 self.emit(emission, goal.names)
-        except Exception as err:  # a bad expression fails the behaviour, not the server
-            self.get_logger().error(f"{behaviour.name}: script failed: {err!r}")
+        except Exception as err:  # a failing script aborts the goal, not the server's node
+            self._failed(f"{behaviour.name}: script failed: {err!r}")
             handle.abort()
             self.started.append((behaviour.name, "aborted"))
             return action.Result(outcome="aborted")
-        result = action.Result(outcome=outcome)
-        for output in behaviour.outputs:
-            if output.name in outputs:
-                setattr(result, output.field, encode(output.type, outputs[output.name]))
         if outcome == "aborted":
             handle.abort()
         else:
@@ -581,7 +616,7 @@ class SimulatedBehaviours(Node):
                     for emission in every.emit:
                         self.emit(emission, goal.names)
             except Exception as err:
-                self.get_logger().error(f"{goal.behaviour.name}: emission failed: {err!r}")
+                self._failed(f"{goal.behaviour.name}: emission failed: {err!r}")
             self._periodic(goal, every, every.period)
 
         goal.timers.append(self.scheduler.call_later(delay * self.time_scale, tick))
@@ -610,7 +645,12 @@ class SimulatedBehaviours(Node):
                     goal.names = names
                     self._finish(goal, until.ending)
             except Exception as err:
-                self.get_logger().error(f"{goal.behaviour.name}: `until` failed: {err!r}")
+                self._failed(f"{goal.behaviour.name}: `until` failed: {err!r}")
+
+    def _failed(self, error: str) -> None:
+        self.get_logger().error(error)
+        if len(self.errors) < 100:  # a script failing on every tick must not fill memory
+            self.errors.append(error)
 
     def emit(self, emission: Emission, names: Mapping[str, Any]) -> None:
         """Publish an event on behalf of the member."""

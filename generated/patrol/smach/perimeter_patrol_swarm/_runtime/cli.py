@@ -3,46 +3,170 @@
 
     python -m <package> --member UAV --id 3 --events launch@0.1,missionStart@0.5
     python -m <package> --swarm --time-scale 0.01 --duration 5
+    python -m <package> --swarm --library my_platform:library     # the platform's behaviours
 
-Prints one JSON line per processed event and member: time, member, event, active states.
+Prints one JSON line per processed event and member: time, member, event, active states; and one
+line per behaviour fault (`"fault": ...`, docs/runtime.md). Exit status: 0 when every member ended
+cleanly, 1 when a behaviour failed, was abandoned, blocked the loop or overran the hard deadline
+(or the engine reported an error), 2 for bad arguments, 130 on Ctrl-C.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
+import importlib
 import json
+import math
+import os
 import sys
+import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from types import ModuleType
-from typing import Any
+from typing import Any, NoReturn
 
 from .engine import Event
-from .member import InMemoryBus, Library, Member
+from .member import CANCEL_GRACE, Fault, InMemoryBus, Library, Member
+
+BEAT = 0.05  # seconds between the loop's heartbeats (what the watchdog thread watches)
+BLOCK_AFTER = 0.5  # a loop that misses its heartbeat this long is blocked by a behaviour
+HARD_SLACK = 1.0  # seconds past duration + grace after which the process ends regardless
 
 
 class JsonTracer:
     def __init__(self, out: Any = sys.stdout) -> None:
         self.out = out
         self.start = time.monotonic()
+        self.lock = threading.Lock()  # the watchdog thread writes its last line too
 
     def step(self, member: Member, event: Event | None) -> None:
-        record = {
-            "t": round(time.monotonic() - self.start, 4),
-            "member": f"{member.member_type}/{member.member_id}",
-            "event": event.name if event is not None else None,
-            "active": member.active,
-        }
-        print(json.dumps(record), file=self.out, flush=True)
+        self._write(
+            {
+                "t": round(time.monotonic() - self.start, 4),
+                "member": f"{member.member_type}/{member.member_id}",
+                "event": event.name if event is not None else None,
+                "active": member.active,
+            }
+        )
+
+    def fault(self, member: Member, fault: Fault, timeout: float = -1) -> None:
+        self._write(
+            {
+                "t": round(time.monotonic() - self.start, 4),
+                "member": f"{member.member_type}/{member.member_id}",
+                "fault": fault.kind,
+                "behaviour": fault.behaviour,
+                "state": fault.state,
+                "error": fault.error,
+            },
+            timeout,
+        )
+
+    def _write(self, record: Mapping[str, Any], timeout: float = -1) -> None:
+        if self.lock.acquire(timeout=timeout):
+            try:
+                print(json.dumps(record), file=self.out, flush=True)
+            finally:
+                self.lock.release()
 
 
-def _station_events(text: str) -> list[tuple[float, str]]:
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        """One line on stderr, exit 2 (argparse would print the usage first)."""
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def _number(text: str, low: float, low_ok: bool) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value) or value < low or (value == low and not low_ok):
+        bound = f">= {low:g}" if low_ok else f"> {low:g}"
+        raise argparse.ArgumentTypeError(f"expected a finite number {bound}, got {text!r}")
+    return value
+
+
+def _seconds(text: str) -> float:
+    return _number(text, 0.0, low_ok=True)
+
+
+def _scale(text: str) -> float:
+    return _number(text, 0.0, low_ok=False)
+
+
+def _member_id(text: str) -> str:
+    if not text or any(c.isspace() or not c.isprintable() for c in text) or len(text) > 200:
+        raise argparse.ArgumentTypeError(
+            f"a member id is 1-200 printable characters without spaces, got {text!r}"
+        )
+    return text
+
+
+def _library(text: str) -> Callable[..., Library]:
+    """`MODULE:FACTORY`: the platform's behaviour library (called with the time scale)."""
+    module_name, _, attribute = text.partition(":")
+    if not module_name or not attribute.isidentifier():
+        raise argparse.ArgumentTypeError(f"expected MODULE:FACTORY, got {text!r}")
+    try:
+        module = importlib.import_module(module_name)
+    except (ImportError, SyntaxError) as err:
+        raise argparse.ArgumentTypeError(f"cannot import {module_name}: {err}") from None
+    factory = getattr(module, attribute, None)
+    if not callable(factory):
+        raise argparse.ArgumentTypeError(f"{module_name} has no callable {attribute}")
+    return factory  # type: ignore[no-any-return]
+
+
+def station_events(text: str, known: Callable[[str], bool]) -> list[tuple[float, str]]:
+    """`launch@0.1,missionStart@0.5` -> [(seconds, name), ...] sorted by time (no `@`: at 0).
+    Raises ValueError naming the first bad item."""
     events = []
     for item in filter(None, (part.strip() for part in text.split(","))):
-        name, _, at = item.partition("@")
-        events.append((float(at or 0), name))
+        name, separator, at = item.partition("@")
+        if "@" in at or (separator and not at):
+            raise ValueError(f"{item!r}: expected name@seconds")
+        if not name:
+            raise ValueError(f"{item!r}: no event name")
+        if not known(name):
+            raise ValueError(f"{item!r}: no member reacts to an event {name!r}")
+        try:
+            seconds = _seconds(at or "0")
+        except argparse.ArgumentTypeError as err:
+            raise ValueError(f"{item!r}: {err}") from None
+        events.append((seconds, name))
     return sorted(events)
+
+
+def _parser(prog: str, member_types: Mapping[str, ModuleType]) -> _Parser:
+    parser = _Parser(prog=prog, description="Run swarm members with simulated behaviours.")
+    who = parser.add_mutually_exclusive_group(required=True)
+    who.add_argument("--member", choices=sorted(member_types), help="member type to run")
+    who.add_argument("--swarm", action="store_true", help="run the whole swarm composition")
+    parser.add_argument("--id", default="1", type=_member_id, help="member id (with --member)")
+    parser.add_argument("--events", default="", help="station events: name@seconds,...")
+    parser.add_argument(
+        "--time-scale", type=_scale, default=1.0, help="scale of simulated durations"
+    )
+    parser.add_argument(
+        "--duration", type=_seconds, default=10.0, help="stop after this many seconds"
+    )
+    parser.add_argument(
+        "--library",
+        type=_library,
+        default=None,
+        metavar="MODULE:FACTORY",
+        help="the platform's behaviour library instead of the simulated one",
+    )
+    parser.add_argument(
+        "--grace",
+        type=_seconds,
+        default=CANCEL_GRACE,
+        help="seconds a cancelled behaviour may take to end before it is abandoned",
+    )
+    return parser
 
 
 def main(
@@ -52,19 +176,13 @@ def main(
     prog: str = "swarm",
     argv: list[str] | None = None,
 ) -> int:
-    parser = argparse.ArgumentParser(
-        prog=prog, description="Run swarm members with simulated behaviours."
-    )
-    who = parser.add_mutually_exclusive_group(required=True)
-    who.add_argument("--member", choices=sorted(member_types), help="member type to run")
-    who.add_argument("--swarm", action="store_true", help="run the whole swarm composition")
-    parser.add_argument("--id", default="1", help="member id (with --member)")
-    parser.add_argument("--events", default="", help="station events: name@seconds,...")
-    parser.add_argument(
-        "--time-scale", type=float, default=1.0, help="scale of simulated durations"
-    )
-    parser.add_argument("--duration", type=float, default=10.0, help="stop after this many seconds")
+    parser = _parser(prog, member_types)
     args = parser.parse_args(argv)
+    charts = {kind: module.build() for kind, module in member_types.items()}
+    try:
+        args.events = station_events(args.events, lambda name: _reacts(charts.values(), name))
+    except ValueError as err:
+        parser.error(f"argument --events: {err}")
     if args.member:
         members = [(args.member, str(args.id))]
     else:
@@ -73,7 +191,37 @@ def main(
             for kind, count in composition.items()
             for n in range(1, count + 1)
         ]
-    return asyncio.run(_run(member_types, members, library_factory(args.time_scale), args))
+    library = (args.library or library_factory)(args.time_scale)
+    outputs = _declared_outputs(member_types)
+    runner = asyncio.Runner()  # its SIGINT handling cancels the run instead of raising anywhere
+    try:
+        code = runner.run(_run(member_types, members, library, args, outputs))
+    except KeyboardInterrupt:
+        code = 130
+    loop = runner.get_loop()
+    if any(not task.done() for task in asyncio.all_tasks(loop)):
+        # abandoned behaviours ignore cancellation, so closing the loop would wait for them
+        # forever (asyncio.run does): the process ends without them
+        _exit(code)
+    runner.close()
+    return code
+
+
+def _reacts(charts: Any, name: str) -> bool:
+    return any(node.matching(name) for chart in charts for node in chart.nodes.values())
+
+
+def _declared_outputs(member_types: Mapping[str, ModuleType]) -> dict[str, Sequence[str]] | None:
+    """The declared outputs of each behaviour, from the package's `behaviours.SIGNATURES`
+    (behaviour -> (kind, inputs, outputs, outcomes)) when the package has one."""
+    for module in member_types.values():
+        package = module.__name__.rpartition(".")[0]
+        try:
+            signatures = importlib.import_module(f"{package}.behaviours").SIGNATURES
+            return {name: tuple(entry[2]) for name, entry in signatures.items()}
+        except (ImportError, AttributeError, TypeError, IndexError, ValueError):
+            continue
+    return None
 
 
 async def _run(
@@ -81,6 +229,7 @@ async def _run(
     members: list[tuple[str, str]],
     library: Library,
     args: Any,
+    outputs: Mapping[str, Sequence[str]] | None,
 ) -> int:
     bus = InMemoryBus()
     tracer = JsonTracer()
@@ -93,20 +242,117 @@ async def _run(
             bus,
             event_scopes=member_types[kind].EVENT_SCOPES,
             tracer=tracer,
+            outputs=outputs,
+            on_fault=tracer.fault,
+            grace=args.grace,
         )
         for kind, member_id in members
     ]
-    tasks = [asyncio.create_task(m.run()) for m in running]
-    started = time.monotonic()
-    for at, name in _station_events(args.events):
-        await asyncio.sleep(max(0.0, at - (time.monotonic() - started)))
-        bus.broadcast(name)
-    remaining = args.duration - (time.monotonic() - started)
-    await asyncio.wait(tasks, timeout=max(0.0, remaining))
+    watchdog = Watchdog(running, tracer, args.duration + args.grace + HARD_SLACK)
+    watchdog.start(asyncio.get_running_loop())
+    tasks = [asyncio.create_task(m.run(), name=f"member {m.member_id}") for m in running]
+    watchdog.runs = dict(zip(tasks, running, strict=True))
+    station = asyncio.create_task(_station(bus, args.events))
+    await asyncio.wait(tasks, timeout=args.duration)
+    station.cancel()
     for member in running:
         member.stop()
-    await asyncio.gather(*tasks, return_exceptions=True)
+    results = await asyncio.gather(*tasks, station, return_exceptions=True)
+    watchdog.stop()
+    for member, result in zip(running, results[: len(tasks)], strict=True):
+        if isinstance(result, BaseException):  # the member itself broke (not a behaviour)
+            member.add_error(f"the member stopped: {result!r}")
     for member in running:
         for error in member.errors:
             print(f"{member.member_type}/{member.member_id}: {error}", file=sys.stderr)
-    return 1 if any(m.errors for m in running) else 0
+    return 0 if all(m.clean for m in running) else 1
+
+
+async def _station(bus: InMemoryBus, events: list[tuple[float, str]]) -> None:
+    started = time.monotonic()
+    for at, name in events:
+        await asyncio.sleep(max(0.0, at - (time.monotonic() - started)))
+        bus.broadcast(name)
+
+
+class Watchdog:
+    """Watches the event loop from a thread. The loop beats every BEAT seconds; when a beat is
+    late by more than BLOCK_AFTER, the behaviour task running then is noted, and the member
+    reports it (`blocked`, with how long) as soon as the loop runs again. At the hard deadline
+    (seconds after the start) the process ends with exit 1, whatever blocks it (`overran`)."""
+
+    def __init__(self, members: list[Member], tracer: JsonTracer, deadline: float) -> None:
+        self.members = members
+        self.tracer = tracer
+        self.deadline = time.monotonic() + deadline
+        self.last = time.monotonic()
+        self.suspect: tuple[Member, str, str] | None = None
+        self.runs: dict[asyncio.Task[Any], Member] = {}  # each member's own task
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self._stopped = threading.Event()
+        self._handle: asyncio.TimerHandle | None = None
+
+    def start(self, loop: asyncio.AbstractEventLoop) -> None:
+        self.loop = loop
+        self._beat()
+        threading.Thread(target=self._watch, name="swarm watchdog", daemon=True).start()
+
+    def stop(self) -> None:
+        self._stopped.set()
+        if self._handle is not None:
+            self._handle.cancel()
+
+    def _beat(self) -> None:
+        """In the loop: the heartbeat; report a blocking that just ended."""
+        now = time.monotonic()
+        suspect, self.suspect = self.suspect, None
+        if suspect is not None:
+            member, behaviour, state = suspect
+            lag = f"kept the event loop busy for {now - self.last:.2f} s"
+            member.report(Fault("blocked", behaviour, state, lag))
+        self.last = now
+        assert self.loop is not None
+        self._handle = self.loop.call_later(BEAT, self._beat)
+
+    def _watch(self) -> None:
+        while not self._stopped.wait(BEAT):
+            now = time.monotonic()
+            if self.suspect is None and now - self.last > BLOCK_AFTER:
+                self.suspect = self._running()
+            if now > self.deadline:
+                self._overran()
+
+    def _running(self) -> tuple[Member, str, str] | None:
+        """The member and behaviour the blocked loop runs (read from this thread, while the
+        loop is stuck); behaviour "-" when it is the member's own work (its engine)."""
+        assert self.loop is not None
+        task = asyncio.current_task(self.loop)
+        for member in self.members:
+            try:
+                node = member.behaviour_of(task)
+            except RuntimeError:  # changed while read: the loop is not stuck after all
+                continue
+            if node is not None and node.call is not None:
+                return member, node.call.behaviour, node.id
+        own = self.runs.get(task) if task is not None else None
+        return (own, "-", "-") if own is not None else None
+
+    def _overran(self) -> NoReturn:
+        error = f"still blocking the event loop {HARD_SLACK:g} s past --duration + --grace"
+        blocker = self.suspect or self._running()
+        if blocker is None:
+            print(f"swarm: the event loop {error}", file=sys.stderr)
+            _exit(1)
+        member, behaviour, state = blocker
+        # written from this thread: the loop, which would otherwise write it, is stuck
+        self.tracer.fault(member, Fault("overran", behaviour, state, error), timeout=0.5)
+        name = f"{member.member_type}/{member.member_id}"
+        print(f"{name}: behaviour {behaviour} in {state} overran: {error}", file=sys.stderr)
+        _exit(1)
+
+
+def _exit(code: int) -> NoReturn:
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(OSError, ValueError):  # a closed stream: nothing to flush
+            stream.flush()
+    os._exit(code)

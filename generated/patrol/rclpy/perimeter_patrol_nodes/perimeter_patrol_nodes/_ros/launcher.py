@@ -11,7 +11,10 @@ file (`launch/<swarm>.launch.py`) runs the same nodes one process each instead.
 
 It exits when every member has reached its final state (0), after `--duration` simulated
 seconds (0), on SIGINT/SIGTERM (0), or when action servers are missing (3); 1 when a member
-reported errors. The last line on stdout is a JSON summary.
+reported errors (a goal aborted by a failing server or with an undeclared outcome among them);
+2, in one line and before ROS starts, for bad arguments (a `--station` time that is not a finite
+number >= 0, an event no member reacts to, a state no member has; counts, times) or a bad
+script. The last line on stdout is a JSON summary.
 """
 
 from __future__ import annotations
@@ -19,11 +22,12 @@ from __future__ import annotations
 import argparse
 import itertools
 import json
+import math
 import sys
 import time
 from collections import Counter
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any, NoReturn
 
 import rclpy
 from rclpy.context import Context as RosContext
@@ -46,19 +50,72 @@ from .node import (
 )
 from .simulated import ScriptError, SimulatedBehaviours
 
+MAX_MEMBERS = 1000  # per member type in one process (each member is several ROS nodes)
+
 
 def station_events(text: str) -> list[tuple[str, float | None, str | None]]:
     """`launch@1,missionStart@Loitering,missionAbort@60` -> [(name, seconds, state), ...]:
     an event is sent at a simulated time, or as soon as every member that has the state is in
-    it; in the order given (an event waits for the ones before it)."""
+    it; in the order given (an event waits for the ones before it). A time is a finite number
+    >= 0; anything else raises ScriptError."""
     events: list[tuple[str, float | None, str | None]] = []
     for item in filter(None, (part.strip() for part in text.split(","))):
-        name, _, at = (p.strip() for p in item.partition("@"))
+        name, separator, at = (p.strip() for p in item.partition("@"))
+        if not name:
+            raise ScriptError(f"--station: {item!r}: no event name")
+        if "@" in at or (separator and not at):
+            raise ScriptError(f"--station: {item!r}: expected name@seconds or name@state")
         try:
-            events.append((name, float(at or 0), None))
+            seconds = float(at or 0)
         except ValueError:
             events.append((name, None, at))
+            continue
+        if not math.isfinite(seconds) or seconds < 0:
+            raise ScriptError(f"--station: {item!r}: a time is a finite number >= 0")
+        events.append((name, seconds, None))
     return events
+
+
+def _check_station(
+    items: list[tuple[str, float | None, str | None]], specs: Mapping[str, MemberSpec]
+) -> None:
+    """Every station event is one some member reacts to, every state one some member has."""
+    charts = [spec.build() for spec in specs.values()]
+    for name, _, state in items:
+        if not any(node.matching(name) for chart in charts for node in chart.nodes.values()):
+            raise ScriptError(f"--station: no member reacts to an event {name!r}")
+        if state is not None and not any(state in chart.nodes for chart in charts):
+            raise ScriptError(f"--station: no member has a state {state!r}")
+
+
+def _number(low: float, low_ok: bool) -> Callable[[str], float]:
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        if not math.isfinite(value) or value < low or (value == low and not low_ok):
+            bound = f">= {low:g}" if low_ok else f"> {low:g}"
+            raise argparse.ArgumentTypeError(f"expected a finite number {bound}, got {text!r}")
+        return value
+
+    return parse
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
+    if not 0 <= value <= MAX_MEMBERS:
+        raise argparse.ArgumentTypeError(f"expected 0 to {MAX_MEMBERS} members, got {value}")
+    return value
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        """One line on stderr, exit 2 (argparse would print the usage first)."""
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
 
 
 class StationProgram:
@@ -145,7 +202,7 @@ class Station(Node):
 
 
 def _parser(prog: str, specs: Mapping[str, MemberSpec], composition: Mapping[str, int]) -> Any:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog=prog,
         description="Run the whole swarm (members + simulated behaviours) in one process.",
     )
@@ -153,14 +210,17 @@ def _parser(prog: str, specs: Mapping[str, MemberSpec], composition: Mapping[str
         parser.add_argument(
             f"--{spec.node_name.replace('_', '-')}",
             dest=f"count_{spec.node_name}",
-            type=int,
+            type=_count,
             default=composition.get(kind, 1),
             metavar="N",
             help=f"members of type {kind} (default {composition.get(kind, 1)})",
         )
     parser.add_argument("--script", help="simulation script (JSON); see _ros/simulated.py")
     parser.add_argument(
-        "--time-scale", type=float, default=1.0, help="wall seconds per simulated second"
+        "--time-scale",
+        type=_number(0.0, low_ok=False),
+        default=1.0,
+        help="wall seconds per simulated second",
     )
     parser.add_argument(
         "--station",
@@ -169,7 +229,10 @@ def _parser(prog: str, specs: Mapping[str, MemberSpec], composition: Mapping[str
         "member having that state is in it), comma-separated",
     )
     parser.add_argument(
-        "--duration", type=float, default=None, help="stop after this many simulated seconds"
+        "--duration",
+        type=_number(0.0, low_ok=True),
+        default=None,
+        help="stop after this many simulated seconds",
     )
     parser.add_argument(
         "--no-simulation",
@@ -179,7 +242,10 @@ def _parser(prog: str, specs: Mapping[str, MemberSpec], composition: Mapping[str
     parser.add_argument("--trace", action="store_true", help="one JSON line per member step")
     parser.add_argument("--events", action="store_true", help="one JSON line per swarm event")
     parser.add_argument(
-        "--server-timeout", type=float, default=30.0, help="seconds to wait for action servers"
+        "--server-timeout",
+        type=_number(0.0, low_ok=False),
+        default=30.0,
+        help="seconds to wait for action servers",
     )
     parser.add_argument(
         "--executor",
@@ -199,7 +265,13 @@ def main(
     argv: Sequence[str] | None = None,
 ) -> int:
     raw = list(sys.argv[1:] if argv is None else argv)
-    args = _parser(prog, specs, composition).parse_args(remove_ros_args(["x", *raw])[1:])
+    parser = _parser(prog, specs, composition)
+    args = parser.parse_args(remove_ros_args(["x", *raw])[1:])
+    try:  # before ROS starts: a bad --station is an argument error
+        program = station_events(args.station)
+        _check_station(program, specs)
+    except ScriptError as err:
+        parser.error(str(err))
     counts = {kind: getattr(args, f"count_{spec.node_name}") for kind, spec in specs.items()}
     context = rclpy.get_default_context()  # the default one: SIGINT/SIGTERM end it cleanly
     rclpy.init(args=["launch_swarm", *raw], context=context)
@@ -280,7 +352,7 @@ def main(
         started = station.started = time.monotonic()
         for member in members:
             member.start()
-        StationProgram(station, station_events(args.station), members, args.time_scale).advance()
+        StationProgram(station, program, members, args.time_scale).advance()
         limit = None if args.duration is None else args.duration * args.time_scale
         spin_until(executor, lambda: all(m.finished for m in members), limit)
         finished_at = time.monotonic()
@@ -306,8 +378,12 @@ def main(
             "first_s": {k: round(v, 4) for k, v in sorted(station.first.items())},
             "steps": sum(m.steps for m in members),
         }
+        servers = [n for n in nodes if isinstance(n, SimulatedBehaviours)]
+        failures = {n.member_id: n.errors for n in servers if n.errors}
+        if failures:  # only then: the summary of a clean run stays as it was
+            summary["server_errors"] = failures
         print(json.dumps(summary), flush=True)
-        code = 1 if any(m.errors for m in members) else 0
+        code = 1 if any(m.errors for m in members) or failures else 0
     except ScriptError as err:
         print(f"{prog}: {err}", file=sys.stderr)
         code = 2

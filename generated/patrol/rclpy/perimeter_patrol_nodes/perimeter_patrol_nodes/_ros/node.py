@@ -73,6 +73,7 @@ STATUS_OUTCOMES = {
     GoalStatus.STATUS_CANCELED: "preempted",
 }
 SERVER_RETRY_S = 0.05  # how often a goal waits for its action server to appear
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 
 # --- what generated member modules declare
 
@@ -139,15 +140,26 @@ def encode(type_: str, value: Any) -> Any:
         return value if isinstance(value, str) else ("" if value is None else str(value))
     if type_ == "bool":
         return bool(value) if isinstance(value, bool | int | float) else False
-    if type_ == "int64":
-        if isinstance(value, bool | int):
-            return int(value)
-        if isinstance(value, float) and math.isfinite(value):
+    if type_ == "int64":  # out of range would fail when the message is sent, in the executor
+        if isinstance(value, bool | int | float) and INT64_MIN <= value <= INT64_MAX:
             return int(value)
         return 0
     if type_ == "float64":
         return float(value) if isinstance(value, bool | int | float) else 0.0
     raise ValueError(f"unknown field type {type_!r}")
+
+
+def fits(type_: str, value: Any) -> bool:
+    """`value` is one the ROS field of `type_` carries as it is (None: not given, the zero),
+    not one `encode` would replace by the zero: what a behaviour's output must be."""
+    if value is None or type_ in ("json", "string"):
+        return True
+    if type_ == "bool":
+        return isinstance(value, bool)
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if type_ == "int64":
+        return number and isinstance(value, int) and INT64_MIN <= value <= INT64_MAX
+    return number and math.isfinite(float(value)) if type_ == "float64" else False
 
 
 def decode(type_: str, value: Any) -> tuple[bool, Any]:
@@ -292,6 +304,9 @@ class MemberOptions:
     time_scale: float | None = None
     tracer: Callable[[MemberNode, SwarmEvent | None], None] | None = None
     parameter_overrides: Sequence[RosParameter[Any]] = ()
+    # a result with an undeclared outcome is a failing behaviour (`aborted`); replay turns it
+    # off, since a scenario's outcome is taken as given (as `runtime.replay` does)
+    check_outcomes: bool = True
 
 
 class MemberNode(Node):
@@ -635,6 +650,14 @@ class MemberNode(Node):
             return
         result = response.result
         outcome = result.outcome or STATUS_OUTCOMES.get(response.status, "aborted")
+        declared = run.behaviour.outcomes
+        if self.options.check_outcomes and declared and outcome not in declared:
+            self.errors.append(
+                f"behaviour {run.behaviour.name} in {run.node.id} failed: "
+                f"returned the undeclared outcome {outcome[:80]!r}"
+            )
+            self._outcome(run, "aborted", {})
+            return
         outputs: dict[str, Any] = {}
         for output in run.behaviour.outputs:
             present, value = decode(output.type, getattr(result, output.field))

@@ -148,7 +148,9 @@ class Replay:
         self.member = MemberNode(
             spec,
             namespace=NAMESPACE,
-            options=MemberOptions(member_id=MEMBER_ID, isolated=True, timers=False),
+            options=MemberOptions(
+                member_id=MEMBER_ID, isolated=True, timers=False, check_outcomes=False
+            ),
             scheduler=self.driver.scheduler,
             context=context,
         )
