@@ -13,12 +13,15 @@ import traceback
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
-from typing import ParamSpec, TypeVar
+from typing import TYPE_CHECKING, NoReturn, ParamSpec, TypeVar
 
 import click
 
-from swarmgen import __version__, pipeline
+from swarmgen import __version__, console, pipeline
 from swarmgen import diagnostics as dg
+
+if TYPE_CHECKING:
+    from swarmgen.sim.scenario import Scenario
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -34,9 +37,8 @@ def _guarded(command: Callable[P, R]) -> Callable[P, R]:
             return command(*args, **kwargs)
         except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
-        except pipeline.OutputError as err:
-            click.echo(f"swarmgen: error: {err}", err=True)
-            sys.exit(dg.ExitCode.INPUT_ERROR)
+        except (pipeline.OutputError, console.StreamError, console.OutputPathError) as err:
+            _fail(str(err))
         except Exception as err:  # a bug: report it without a traceback wall
             click.echo(f"swarmgen: internal error: {type(err).__name__}: {err}", err=True)
             click.echo(
@@ -51,9 +53,30 @@ def _guarded(command: Callable[P, R]) -> Callable[P, R]:
 
 
 def _debug() -> bool:
-    import os
-
     return os.environ.get("SWARMGEN_DEBUG", "") not in {"", "0"}
+
+
+def _fail(message: str) -> NoReturn:
+    """A user error: one line on stderr, exit 2."""
+    click.echo(f"swarmgen: error: {' '.join(message.splitlines())}", err=True)
+    sys.exit(dg.ExitCode.INPUT_ERROR)
+
+
+class _PathType(click.Path):
+    """A path argument: an empty string is refused (Path("") would silently be ".")."""
+
+    def convert(
+        self,
+        value: str | os.PathLike[str],
+        param: click.Parameter | None,
+        ctx: click.Context | None,
+    ) -> str | bytes | os.PathLike[str]:
+        if not os.fspath(value):
+            self.fail("an empty path; give a file or directory name", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+PATH = _PathType(path_type=Path)
 
 
 def _emit_diagnostics(diagnostics: list[dg.Diagnostic], fmt: str, *, to_stdout: bool) -> None:
@@ -67,7 +90,7 @@ def _emit_diagnostics(diagnostics: list[dg.Diagnostic], fmt: str, *, to_stdout: 
         click.echo(text, nl=False, err=not to_stdout)
 
 
-MODEL = click.argument("model", type=click.Path(path_type=Path))
+MODEL = click.argument("model", type=PATH)
 FORMAT = click.option(
     "--format",
     "fmt",
@@ -111,7 +134,7 @@ def validate(model: Path, fmt: str, strict: bool, disabled: tuple[str, ...]) -> 
     result = pipeline.validate(model)
     diagnostics = dg.apply_options(result.diagnostics, strict=strict, disabled=disabled)
     _emit_diagnostics(diagnostics, fmt, to_stdout=True)
-    click.echo(f"swarmgen: {model}: {dg.summary_line(diagnostics)}", err=True)
+    click.echo(f"swarmgen: {console.shown(model)}: {dg.summary_line(diagnostics)}", err=True)
     sys.exit(dg.exit_code_for(diagnostics))
 
 
@@ -123,9 +146,7 @@ def _check_codes(codes: tuple[str, ...]) -> None:
 
 @main.command(name="compile")
 @MODEL
-@click.option(
-    "-o", "--output", type=click.Path(path_type=Path), required=True, help="Output directory."
-)
+@click.option("-o", "--output", type=PATH, required=True, help="Output directory.")
 @click.option("--check", is_flag=True, help="Write nothing; exit 1 with a diff if OUTPUT is stale.")
 @click.option(
     "--backend",
@@ -194,7 +215,7 @@ def compile_(
 @click.option(
     "-o",
     "--output",
-    type=click.Path(path_type=Path),
+    type=PATH,
     default=Path("schemas"),
     show_default=True,
     help="Directory for ir.schema.json.",
@@ -206,28 +227,38 @@ def schema(output: Path, check: bool) -> None:
     target = output / "ir.schema.json"
     text = pipeline.ir_schema()
     if check:
-        current = target.read_text(encoding="utf-8") if target.is_file() else ""
-        if current != text:
-            click.echo(f"swarmgen: {target} is stale; run: swarmgen schema -o {output}", err=True)
+        try:
+            current = target.read_bytes() if target.is_file() else b""
+        except OSError as err:
+            _fail(f"{console.shown(target)}: cannot read: {err.strerror}")
+        if current != text.encode():
+            shown = console.shown(output)
+            click.echo(
+                f"swarmgen: {shown}/ir.schema.json is stale; run: swarmgen schema -o {shown}",
+                err=True,
+            )
             sys.exit(dg.ExitCode.MODEL_ERRORS)
         return
-    output.mkdir(parents=True, exist_ok=True)
-    target.write_text(text, encoding="utf-8")
-    click.echo(f"swarmgen: wrote {target}", err=True)
+    made = console.check_directory(output, "-o")
+    try:
+        console.check_file(target, "-o")
+        console.write_file(target, text.encode(), "-o")
+    except console.OutputPathError:
+        console.remove_made(made)
+        raise
+    click.echo(f"swarmgen: wrote {console.shown(target)}", err=True)
 
 
 @main.command()
 @MODEL
 @click.option("--member", required=True, help="Member type to run.")
-@click.option(
-    "--script", "scenario", type=click.Path(path_type=Path), required=True, help="Scenario (JSON)."
-)
+@click.option("--script", "scenario", type=PATH, required=True, help="Scenario (JSON).")
 @click.option(
     "--backend", type=click.Choice(["asyncio", "smach", "scxml", "rclpy"]), default="asyncio", show_default=True,
     help="Where to run: the generated asyncio, smach or rclpy code, or the SCXML in Qt SCXML.",
 )  # fmt: skip
 @click.option(
-    "--record", type=click.Path(path_type=Path),
+    "--record", type=PATH,
     help="Also write the trace as a ROS 2 bag into this new directory (docs/trace.md).",
 )  # fmt: skip
 @STORAGE
@@ -238,17 +269,17 @@ def replay(
     """Run one member of MODEL against a scenario; print its trace as JSON lines."""
     from swarmgen import replay as replaying
 
-    if record is not None and record.exists():
-        click.echo(f"swarmgen: error: {record} exists; --record writes a new bag", err=True)
-        sys.exit(dg.ExitCode.INPUT_ERROR)
+    if record is not None:  # checked before anything runs: on failure nothing is written
+        console.check_new_directory(record, "--record")
+        _require_trace("--record")
     try:
         _, steps = replaying.load_scenario(scenario)
         trace = replaying.replay(model, member, steps, backend)
     except replaying.ReplayError as err:
-        click.echo(f"swarmgen: error: {err}", err=True)
-        sys.exit(dg.ExitCode.INPUT_ERROR)
+        _fail(str(err))
     for line in trace:
         click.echo(json.dumps(line, sort_keys=True))
+    sys.stdout.flush()  # a full stdout is reported before the bag is written
     if record is not None:
         _record_replay(record, member, steps, trace, storage)
 
@@ -257,19 +288,24 @@ def _record_replay(
     path: Path, member: str, steps: list[dict[str, object]], trace: list[dict[str, object]],
     storage: str,
 ) -> None:  # fmt: skip
-    try:
-        from swarmgen.trace.bag import TraceError, record_replay
-    except ModuleNotFoundError as err:
-        click.echo(
-            f"swarmgen: error: --record needs {err.name}: pip install 'swarmgen[trace]'", err=True
-        )
-        sys.exit(dg.ExitCode.INPUT_ERROR)
+    from swarmgen.trace.bag import TraceError, record_replay
+
     try:
         record_replay(path, member, steps, trace, storage=storage)
     except TraceError as err:
-        click.echo(f"swarmgen: error: {err}", err=True)
-        sys.exit(dg.ExitCode.INPUT_ERROR)
-    click.echo(f"swarmgen: recorded {len(steps)} step(s) into {path} ({storage})", err=True)
+        _fail(str(err))
+    shown = console.shown(path)
+    click.echo(f"swarmgen: recorded {len(steps)} step(s) into {shown} ({storage})", err=True)
+
+
+def _require_trace(what: str) -> None:
+    """The `trace` extra (rosbags, numpy, matplotlib) is installed, or exit 2 saying so."""
+    try:
+        import matplotlib  # noqa: F401
+        import numpy  # noqa: F401
+        import rosbags  # noqa: F401
+    except ModuleNotFoundError as err:
+        _fail(f"{what} needs {err.name}: pip install 'swarmgen[trace]'")
 
 
 @main.command(name="graph")
@@ -280,7 +316,7 @@ def _record_replay(
     show_default=True, help="Mermaid text, Graphviz DOT, or SVG (laid out by Graphviz `dot`).",
 )  # fmt: skip
 @click.option(
-    "-o", "--output", type=click.Path(path_type=Path),
+    "-o", "--output", type=PATH,
     help="Write one file per diagram into this directory (replaced atomically); else stdout.",
 )  # fmt: skip
 @_guarded
@@ -311,18 +347,16 @@ def graph_(model: Path, member: str | None, diagram_format: str, output: Path | 
 
 
 @main.command()
-@click.argument("bags", nargs=-1, required=True, type=click.Path(path_type=Path))
+@click.argument("bags", nargs=-1, required=True, type=PATH)
 @click.option(
     "--events", help="Comma-separated event names, shown in this order (default: all of them, "
     "in mission order).",
 )  # fmt: skip
 @click.option(
-    "--plot", "plot_path", type=click.Path(path_type=Path),
+    "--plot", "plot_path", type=PATH,
     help="Write a horizontal box plot (.png or .svg).",
 )  # fmt: skip
-@click.option(
-    "--csv", "csv_path", type=click.Path(path_type=Path), help="Write the statistics as CSV."
-)
+@click.option("--csv", "csv_path", type=PATH, help="Write the statistics as CSV.")
 @click.option(
     "--alias", "aliases", multiple=True, metavar="OLD=NEW",
     help="Rename an event while reading (repeatable), e.g. --alias targetDone=targetRescued.",
@@ -347,28 +381,29 @@ def timeline(
             raise click.BadParameter(f"{alias!r} is not OLD=NEW", param_hint="--alias")
         renames[old.strip()] = new.strip()
     if plot_path is not None and plot_path.suffix.lower() not in (".png", ".svg"):
-        raise click.BadParameter(f"{plot_path}: use a .png or .svg file", param_hint="--plot")
-    try:
-        from swarmgen.trace import timeline as timelines
-        from swarmgen.trace.bag import TraceError, read_events
-    except ModuleNotFoundError as err:
-        click.echo(
-            f"swarmgen: error: timeline needs {err.name}: pip install 'swarmgen[trace]'", err=True
-        )
-        sys.exit(dg.ExitCode.INPUT_ERROR)
+        shown = console.shown(plot_path)
+        raise click.BadParameter(f"{shown}: use a .png or .svg file", param_hint="--plot")
+    _require_trace("timeline")
+    from swarmgen.trace import timeline as timelines
+    from swarmgen.trace.bag import TraceError, read_events
+
+    made: list[Path] = []  # the output files' directories, checked (made) before reading
+    for path, option in ((csv_path, "--csv"), (plot_path, "--plot")):
+        made += console.check_file(path, option) if path is not None else []
     try:
         runs = read_events(bags, renames)
     except TraceError as err:
-        click.echo(f"swarmgen: error: {err}", err=True)
-        sys.exit(dg.ExitCode.INPUT_ERROR)
+        console.remove_made(made)
+        _fail(str(err))
     chosen = [e.strip() for e in events.split(",") if e.strip()] if events else None
     result = timelines.build(runs, chosen)
+    picture = timelines.render(result, plot_path.suffix.lower()[1:]) if plot_path else b""
     click.echo(timelines.table(result), nl=False)
+    sys.stdout.flush()
     if csv_path is not None:
-        csv_path.parent.mkdir(parents=True, exist_ok=True)
-        csv_path.write_text(timelines.csv_text(result), encoding="utf-8")
+        console.write_file(csv_path, timelines.csv_text(result).encode(), "--csv")
     if plot_path is not None:
-        timelines.plot(result, plot_path)
+        console.write_file(plot_path, picture, "--plot")
     click.echo(f"swarmgen: {len(runs)} run(s), {len(result.events)} event(s)", err=True)
 
 
@@ -383,18 +418,20 @@ def timeline(
     help="Member counts to sweep, e.g. UAV=1,2,4,8 (repeatable); overrides the scenario.",
 )  # fmt: skip
 @click.option("--targets", metavar="N[,N...]", help="Target counts to sweep, e.g. 1,2,4,8,16,32.")
-@click.option("--reps", type=click.IntRange(min=1), help="Repetitions per configuration.")
-@click.option("--seed", type=click.IntRange(min=0), help="Random seed (same seed, same numbers).")
+@click.option("--reps", type=click.IntRange(1, 10_000), help="Repetitions per configuration.")
 @click.option(
-    "--workers", type=click.IntRange(min=1), default=1, show_default=True,
+    "--seed", type=click.IntRange(0, 2**63 - 1), help="Random seed (same seed, same numbers)."
+)
+@click.option(
+    "--workers", type=click.IntRange(1, 256), default=1, show_default=True,
     help="Processes to spread configurations over (results do not depend on it).",
 )  # fmt: skip
 @click.option(
-    "-o", "--output", type=click.Path(path_type=Path),
+    "-o", "--output", type=PATH,
     help="Write tables (CSV), results.json and figures (PNG, SVG) here, replaced atomically.",
 )  # fmt: skip
 @click.option(
-    "--record", type=click.Path(path_type=Path),
+    "--record", type=PATH,
     help="Also write one ROS 2 bag per run, DIR/<configuration>-<rep>, into this new directory.",
 )  # fmt: skip
 @STORAGE
@@ -417,18 +454,9 @@ def simulate(
     from swarmgen.sim import run as sim_run
     from swarmgen.sim import scenario as sim_scenario
 
-    if record is not None:
-        if record.exists():
-            click.echo(f"swarmgen: error: {record} exists; --record writes new bags", err=True)
-            sys.exit(dg.ExitCode.INPUT_ERROR)
-        try:
-            import rosbags  # noqa: F401
-        except ModuleNotFoundError as err:
-            click.echo(
-                f"swarmgen: error: --record needs {err.name}: pip install 'swarmgen[trace]'",
-                err=True,
-            )
-            sys.exit(dg.ExitCode.INPUT_ERROR)
+    if record is not None:  # checked before anything runs: on failure nothing is written
+        console.check_new_directory(record, "--record")
+        _require_trace("--record")
 
     started = time.perf_counter()
     try:
@@ -438,6 +466,7 @@ def simulate(
             counts.update(sim_scenario.parse_members(item))
         target_counts = sim_scenario.parse_counts(targets, "--targets") if targets else None
         chosen = chosen.with_overrides(counts, target_counts, reps, seed)
+        _check_sweep(model, chosen)
         shown = [-1]
 
         def progress(done: int, total: int) -> None:
@@ -457,8 +486,7 @@ def simulate(
             model, chosen, output, workers, progress, record, storage
         )
     except (sim_scenario.ScenarioError, sim_run.SimulationError) as err:
-        click.echo(f"swarmgen: error: {err}", err=True)
-        sys.exit(dg.ExitCode.INPUT_ERROR)
+        _fail(str(err))
     coverage = files.get("coverage.csv", b"").decode()
     if output is None:
         click.echo(coverage, nl=False)
@@ -478,16 +506,37 @@ def simulate(
         click.echo(f"swarmgen: recorded {len(sim.runs)} run(s) into {record} ({storage})", err=True)
 
 
+def _check_sweep(model: Path, chosen: Scenario) -> None:
+    """The sweep's limits and the member types of --members, before anything runs (a model
+    with errors is reported by the simulation itself)."""
+    from swarmgen.ir.query import composition
+    from swarmgen.sim import scenario as sim_scenario
+
+    validation = pipeline.validate(model)
+    if validation.model is not None and not dg.has_errors(validation.diagnostics):
+        types = [t.name for t in validation.model.member_types if t.machine]
+        sim_scenario.check(chosen, types, composition(validation.model))
+
+
 def run() -> None:
     """Console entry point: run the command, then end the process at once. Tearing down a large
     model object by object can take a second after the work is done (mypy's `hard_exit` does the
-    same); output is flushed first."""
+    same); output is flushed first. The standard streams follow `swarmgen.console`: a reader
+    that closes early ends nothing, a stdout that cannot be written is one error line (exit 2)."""
+    console.install()
     code: int
     try:
         main(standalone_mode=True)
         code = 0
     except SystemExit as done:
         code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
-    sys.stdout.flush()
+    except console.StreamError as err:  # raised outside a command, e.g. by --help
+        click.echo(f"swarmgen: error: {err}", err=True)
+        code = dg.ExitCode.INPUT_ERROR
+    try:
+        sys.stdout.flush()
+    except console.StreamError as err:
+        click.echo(f"swarmgen: error: {err}", err=True)
+        code = dg.ExitCode.INPUT_ERROR
     sys.stderr.flush()
     os._exit(code)

@@ -25,9 +25,10 @@ from types import ModuleType
 from typing import Any
 
 from swarmgen import diagnostics as dg
-from swarmgen import pipeline
+from swarmgen import jsonfile, pipeline
 from swarmgen.backends.asyncio_backend import member_modules, package_name
 from swarmgen.chart.lower import lower
+from swarmgen.console import shown
 from swarmgen.ir.nodes import Model
 
 SYSTEM_PYTHON = "/usr/bin/python3"
@@ -40,40 +41,71 @@ class ReplayError(Exception):
     """The model, member, scenario or backend cannot be replayed (a user error)."""
 
 
+SCRIPT_BYTES = 8 << 20  # a replay script (docs/trace.md, "Limits"; a step is about 100 bytes)
+MAX_STEPS = 100_000  # steps of a script, and inputs of one burst
+_TOP_KEYS = {"member", "steps", "description"}
+_EVENT_KEYS = {"event": str, "data": dict}
+_COMPLETE_KEYS = {"complete": str, "outcome": str, "outputs": dict, "state": str}
+
+
 def load_scenario(path: Path) -> tuple[str | None, list[dict[str, Any]]]:
-    """(member type or None, steps) from a JSON scenario file; see swarmgen.runtime.replay."""
+    """(member type or None, steps) from a JSON script file; see swarmgen.runtime.replay.
+    `ReplayError` names the file and the JSON path of a bad value."""
     try:
-        payload = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as err:
-        raise ReplayError(f"{path}: cannot read the scenario: {err}") from None
-    except json.JSONDecodeError as err:
+        payload = jsonfile.load(path, SCRIPT_BYTES)
+        return _script(payload)
+    except jsonfile.JsonError as err:
+        message = str(err)
+        prefix = shown(path)
         raise ReplayError(
-            f"{path}:{err.lineno}:{err.colno}: scenario is not JSON: {err.msg}"
+            message if message.startswith(prefix) else f"{prefix}: {message}"
         ) from None
-    steps = payload.get("steps") if isinstance(payload, dict) else payload
-    if not isinstance(steps, list):
-        raise ReplayError(f'{path}: a scenario is a list of steps or {{"steps": [...]}}')
-    for number, step in enumerate(steps, start=1):
-        _check_step(path, number, step)
-    member = payload.get("member") if isinstance(payload, dict) else None
-    return (str(member) if member is not None else None), steps
 
 
-def _check_step(path: Path, number: int, step: object) -> None:
-    if not isinstance(step, dict):
-        raise ReplayError(f"{path}: step {number} is not an object")
-    if "burst" in step:
-        burst = step["burst"]
-        if not isinstance(burst, list) or not burst:
-            raise ReplayError(f"{path}: step {number}: `burst` needs a non-empty list of steps")
-        for inner in burst:
-            _check_step(path, number, inner)
+def _script(payload: Any) -> tuple[str | None, list[dict[str, Any]]]:
+    where = "$"
+    member = None
+    if isinstance(payload, dict):
+        jsonfile.check_keys(payload, _TOP_KEYS, "$")
+        if "steps" not in payload:
+            raise jsonfile.JsonError('$: a script is a list of steps or {"steps": [...]}')
+        if payload.get("member") is not None:
+            member = jsonfile.expect_str(payload["member"], "$.member", empty=False)
+        jsonfile.expect_str(payload.get("description", ""), "$.description")
+        payload, where = payload["steps"], "$.steps"
+    steps = jsonfile.expect_list(payload, where)
+    if len(steps) > MAX_STEPS:
+        raise jsonfile.JsonError(f"{where}: more than {MAX_STEPS:,} steps")
+    for number, step in enumerate(steps):
+        _check_step(step, f"{where}[{number}]", burst_allowed=True)
+    return member, steps
+
+
+def _check_step(step: object, where: str, *, burst_allowed: bool) -> None:
+    item = jsonfile.expect_object(step, where)
+    if "burst" in item:
+        if not burst_allowed:
+            raise jsonfile.JsonError(f"{where}: a burst cannot contain a burst")
+        jsonfile.check_keys(item, {"burst"}, where)
+        inner = jsonfile.expect_list(item["burst"], f"{where}.burst", empty=False)
+        if len(inner) > MAX_STEPS:
+            raise jsonfile.JsonError(f"{where}.burst: more than {MAX_STEPS:,} inputs")
+        for number, each in enumerate(inner):
+            _check_step(each, f"{where}.burst[{number}]", burst_allowed=False)
         return
-    if "event" not in step and "complete" not in step:
-        raise ReplayError(f"{path}: step {number} needs `event`, `complete` or `burst`")
-    for key in ("data", "outputs"):
-        if key in step and not isinstance(step[key], dict | type(None)):
-            raise ReplayError(f"{path}: step {number}: `{key}` must be an object")
+    if "event" in item:
+        keys = _EVENT_KEYS
+    elif "complete" in item:
+        keys = _COMPLETE_KEYS
+    else:
+        raise jsonfile.JsonError(f"{where}: a step needs `event`, `complete` or `burst`")
+    jsonfile.check_keys(item, set(keys), where)
+    for key, kind in keys.items():
+        value, at = item.get(key), jsonfile.key_path(where, key)
+        if kind is dict and value is not None:
+            jsonfile.expect_object(value, at)
+        elif kind is str and (value is not None or key in ("event", "complete")):
+            jsonfile.expect_str(value, at, empty=False)
 
 
 def replay(

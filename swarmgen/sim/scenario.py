@@ -21,10 +21,16 @@ The two scenarios of the paper are shipped in `swarmgen/sim/scenarios/` (`covera
 
 from __future__ import annotations
 
-import json
+import difflib
+import math
+import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
+
+from swarmgen import jsonfile
+from swarmgen.console import shown
 
 SHIPPED = Path(__file__).resolve().parent / "scenarios"
 
@@ -161,181 +167,246 @@ _KEYS = {
     "max_ticks", "reps", "seed", "coverage_levels", "target_levels",
 }  # fmt: skip
 
+# Limits, checked before anything runs (docs/simulate.md): beyond them a sweep would exhaust
+# memory (about 9 KB per member and repetition, 16 bytes per patch and repetition) or overflow
+# the world's 32-bit tick arrays, instead of failing cleanly.
+SCENARIO_BYTES = 1 << 20  # a scenario file
+MAX_SIDE = 10_000  # patches along one side of the world
+MAX_VIEW = 16  # Chebyshev radius of a member's view
+MAX_PATCH_RUNS = 10**8  # patches x repetitions of one configuration
+MAX_MEMBERS = 10_000  # members of one configuration
+MAX_MEMBER_RUNS = 100_000  # members x repetitions of one configuration
+MAX_TARGETS = 100_000  # targets of one configuration (and never more than the patches)
+MAX_REPS = 10_000  # repetitions per configuration
+MAX_RUNS = 100_000  # configurations x repetitions
+MAX_TICKS = 2_000_000_000  # ticks of a repetition (the world stores ticks as int32)
+MAX_TICK_MS = 86_400_000  # one day
+MAX_SEED = 2**63 - 1
+MAX_LIST = 1_000  # counts in a sweep, station events, levels
+_STAMP_NS = 2**63 - 1  # bag stamps (int64 ns) of the last tick must fit
+
 
 def resolve(name_or_path: str) -> Path:
     """`coverage`, `sar` (shipped) or a path to a scenario file."""
     shipped = SHIPPED / f"{name_or_path}.json"
-    if "/" not in name_or_path and not name_or_path.endswith(".json") and shipped.is_file():
+    # os.path.isfile: a name too long for a file name is not an error here, just not shipped
+    if "/" not in name_or_path and not name_or_path.endswith(".json") and os.path.isfile(shipped):
         return shipped
     path = Path(name_or_path)
-    if not path.is_file():
+    if not name_or_path or not os.path.lexists(path):
         names = ", ".join(sorted(p.stem for p in SHIPPED.glob("*.json")))
-        raise ScenarioError(f"no scenario '{name_or_path}': give a file or one of: {names}")
+        raise ScenarioError(f"no scenario '{shown(name_or_path)}': give a file or one of: {names}")
     return path
 
 
 def load(name_or_path: str) -> Scenario:
     path = resolve(name_or_path)
     try:
-        payload = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as err:
-        raise ScenarioError(f"{path}: cannot read the scenario: {err}") from None
-    except json.JSONDecodeError as err:
-        raise ScenarioError(f"{path}:{err.lineno}:{err.colno}: not JSON: {err.msg}") from None
-    try:
+        payload = jsonfile.load(path, SCENARIO_BYTES)
         return parse(payload, default_name=path.stem)
-    except ScenarioError as err:
-        raise ScenarioError(f"{path}: {err}") from None
+    except (jsonfile.JsonError, ScenarioError) as err:
+        message = str(err)
+        prefix = shown(path)
+        raise ScenarioError(
+            message if message.startswith(prefix) else f"{prefix}: {message}"
+        ) from None
 
 
 def parse(payload: Any, default_name: str = "scenario") -> Scenario:
-    if not isinstance(payload, dict):
-        raise ScenarioError("a scenario is a JSON object")
-    unknown = sorted(set(payload) - _KEYS)
-    if unknown:
-        raise ScenarioError(
-            f"unknown key(s) {', '.join(unknown)}; known: {', '.join(sorted(_KEYS))}"
-        )
-    world = _object(payload, "world")
-    unknown_world = sorted(set(world) - {"width", "height", "view"})
-    if unknown_world:
-        raise ScenarioError(f"world: unknown key(s) {', '.join(unknown_world)}")
-    width = _int(world.get("width", 201), "world.width", 1)
-    height = _int(world.get("height", 201), "world.height", 1)
-    view = _int(world.get("view", 1), "world.view", 0)
-    members: dict[str, list[int] | str] = {}
-    for kind, value in _object(payload, "members").items():
-        if isinstance(value, str):
-            if not value.startswith("="):
-                raise ScenarioError(f'members.{kind}: a string must be "=TYPE" (same count)')
-            members[str(kind)] = value
-        else:
-            members[str(kind)] = _counts(value, f"members.{kind}")
-    placement = {}
-    for kind, value in _object(payload, "placement").items():
-        if not isinstance(value, dict):
-            raise ScenarioError(f"placement.{kind} must be an object")
-        extra = sorted(set(value) - {"layout", "spacing", "headings"})
-        if extra:
-            raise ScenarioError(f"placement.{kind}: unknown key(s) {', '.join(extra)}")
-        item = Placement(
-            str(value.get("layout", "south")),
-            float(value.get("spacing", 4.0)),
-            str(value.get("headings", "fan")),
-        )
-        _choice(item.layout, LAYOUTS, f"placement.{kind}.layout")
-        _choice(item.headings, HEADINGS, f"placement.{kind}.headings")
-        placement[str(kind)] = item
-    positions = payload.get("target_positions")
-    target_positions: list[tuple[int, int]] | None = None
-    if positions is not None:
-        if not isinstance(positions, list) or not all(
-            isinstance(p, list) and len(p) == 2 and all(isinstance(c, int) for c in p)
-            for p in positions
-        ):
-            raise ScenarioError("target_positions must be a list of [x, y] patches")
-        target_positions = [(p[0], p[1]) for p in positions]
-        for x, y in target_positions:
-            if not (0 <= x < width and 0 <= y < height):
-                raise ScenarioError(f"target position [{x}, {y}] is outside the world")
-    targets = _counts(payload.get("targets", [0]), "targets", 0)
+    """A scenario from its JSON document; `ScenarioError` names the JSON path of a bad value."""
+    try:
+        return _parse(payload, default_name)
+    except jsonfile.JsonError as err:
+        raise ScenarioError(str(err)) from None
+
+
+def _parse(payload: Any, default_name: str) -> Scenario:
+    top = jsonfile.expect_object(payload, "$")
+    jsonfile.check_keys(top, _KEYS, "$")
+    world = _section(top, "world", {"width", "height", "view"})
+    width = _int(world, "width", 201, "$.world", 1, MAX_SIDE)
+    height = _int(world, "height", 201, "$.world", 1, MAX_SIDE)
+    view = _int(world, "view", 1, "$.world", 0, MAX_VIEW)
+    target_positions = _positions(top.get("target_positions"), width, height)
+    targets = _counts(top.get("targets", [0]), "$.targets", 0, MAX_TARGETS)
     if target_positions is not None:
         targets = [len(target_positions)]
-    station = []
-    for number, item in enumerate(payload.get("station", []), start=1):
-        if not isinstance(item, dict) or "event" not in item:
-            raise ScenarioError(f"station event {number} needs `event` (and `tick`)")
-        data = item.get("data")
-        if data is not None and not isinstance(data, dict):
-            raise ScenarioError(f"station event {number}: `data` must be an object")
-        station.append(
-            StationEvent(
-                _int(item.get("tick", 0), f"station[{number}].tick", 0), str(item["event"]), data
-            )
-        )
-    timing = dict(TIMING_DEFAULTS)
-    for key, value in _object(payload, "timing").items():
-        if key not in TIMING_DEFAULTS:
-            raise ScenarioError(
-                f"timing.{key}: unknown; known: {', '.join(sorted(TIMING_DEFAULTS))}"
-            )
-        timing[key] = _int(value, f"timing.{key}", 1 if key == "tick_ms" else 0)
-    library = {str(k): str(v) for k, v in _object(payload, "library").items()}
-    stop = str(payload.get("stop", "coverage"))
-    _choice(stop, STOPS, "stop")
-    allocation = str(payload.get("allocation", "paired"))
-    _choice(allocation, ALLOCATIONS, "allocation")
-    origin = payload.get("clock_origin")
-    if origin is not None and not any(s.event == origin for s in station):
-        raise ScenarioError(f"clock_origin '{origin}' is not a station event")
-    levels = _fractions(
-        payload.get("coverage_levels", Scenario("x").coverage_levels), "coverage_levels"
-    )
-    target_levels = _fractions(
-        payload.get("target_levels", Scenario("x").target_levels), "target_levels"
-    )
-    stop_level = float(payload.get("stop_level", 1.0))
-    if not 0 < stop_level <= 1:
-        raise ScenarioError("stop_level must be in (0, 1]")
+    station = _station(top.get("station", []))
+    origin = top.get("clock_origin")
+    if origin is not None:
+        jsonfile.expect_str(origin, "$.clock_origin")
+        if not any(s.event == origin for s in station):
+            raise ScenarioError(f"$.clock_origin: '{origin}' is not a station event")
     return Scenario(
-        name=str(payload.get("name", default_name)),
-        description=str(payload.get("description", "")),
+        name=jsonfile.expect_str(top.get("name", default_name), "$.name"),
+        description=jsonfile.expect_str(top.get("description", ""), "$.description"),
         width=width,
         height=height,
         view=view,
-        members=members,
-        placement=placement,
+        members=_members(_section(top, "members", None)),
+        placement=_placements(_section(top, "placement", None)),
         targets=targets,
         target_positions=target_positions,
         station=station,
-        clock_origin=None if origin is None else str(origin),
-        timing=timing,
-        allocation=allocation,
-        library=library,
-        stop=stop,
-        stop_level=stop_level,
-        max_ticks=_int(payload.get("max_ticks", 5_000_000), "max_ticks", 1),
-        reps=_int(payload.get("reps", 50), "reps", 1),
-        seed=_int(payload.get("seed", 1), "seed", 0),
-        coverage_levels=levels,
-        target_levels=target_levels,
+        clock_origin=origin,
+        timing=_timing(_section(top, "timing", set(TIMING_DEFAULTS))),
+        allocation=_choice(top, "allocation", "paired", ALLOCATIONS),
+        library=_library(_section(top, "library", None)),
+        stop=_choice(top, "stop", "coverage", STOPS),
+        stop_level=_number(top, "stop_level", 1.0, "$", 0.0, 1.0),
+        max_ticks=_int(top, "max_ticks", 5_000_000, "$", 1, MAX_TICKS),
+        reps=_int(top, "reps", 50, "$", 1, MAX_REPS),
+        seed=_int(top, "seed", 1, "$", 0, MAX_SEED),
+        coverage_levels=_fractions(top, "coverage_levels", Scenario("x").coverage_levels),
+        target_levels=_fractions(top, "target_levels", Scenario("x").target_levels),
     )
 
 
-def _object(payload: dict[str, Any], key: str) -> dict[str, Any]:
-    value = payload.get(key, {})
-    if not isinstance(value, dict):
-        raise ScenarioError(f"`{key}` must be an object")
+def _section(top: dict[str, Any], key: str, known: set[str] | None) -> dict[str, Any]:
+    value = jsonfile.expect_object(top.get(key, {}), f"$.{key}")
+    if known is not None:
+        jsonfile.check_keys(value, known, f"$.{key}")
     return value
 
 
-def _int(value: Any, where: str, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        raise ScenarioError(f"{where} must be an integer >= {minimum}")
+def _int(obj: dict[str, Any], key: str, default: int, base: str, low: int, high: int) -> int:
+    return jsonfile.expect_int(obj.get(key, default), jsonfile.key_path(base, key), low, high)
+
+
+def _number(
+    obj: dict[str, Any], key: str, default: float, base: str, low: float, high: float
+) -> float:
+    where = jsonfile.key_path(base, key)
+    return jsonfile.expect_number(obj.get(key, default), where, low, high, above=True)
+
+
+def _choice(obj: dict[str, Any], key: str, default: str, choices: tuple[str, ...]) -> str:
+    value = jsonfile.expect_str(obj.get(key, default), f"$.{key}")
+    if value not in choices:
+        raise ScenarioError(f"$.{key}: '{value}': choose one of {', '.join(choices)}")
     return value
 
 
-def _counts(value: Any, where: str, minimum: int = 0) -> list[int]:
+def _counts(value: Any, where: str, low: int, high: int) -> list[int]:
     items = value if isinstance(value, list) else [value]
     if not items:
-        raise ScenarioError(f"{where} needs at least one count")
-    return [_int(v, where, minimum) for v in items]
+        raise ScenarioError(f"{where}: needs at least one count")
+    if len(items) > MAX_LIST:
+        raise ScenarioError(f"{where}: more than {MAX_LIST:,} counts")
+    prefix = where if not isinstance(value, list) else None
+    return [
+        jsonfile.expect_int(v, prefix or f"{where}[{i}]", low, high) for i, v in enumerate(items)
+    ]
 
 
-def _fractions(value: Any, where: str) -> list[float]:
-    if not isinstance(value, list) or not value:
-        raise ScenarioError(f"{where} must be a non-empty list of fractions")
-    out = []
-    for v in value:
-        if isinstance(v, bool) or not isinstance(v, int | float) or not 0 <= v <= 1:
-            raise ScenarioError(f"{where}: {v!r} is not a fraction in [0, 1]")
-        out.append(float(v))
-    return out
+def _members(section: dict[str, Any]) -> dict[str, list[int] | str]:
+    members: dict[str, list[int] | str] = {}
+    for kind, value in section.items():
+        where = jsonfile.key_path("$.members", kind)
+        if isinstance(value, str):
+            if not value.startswith("=") or len(value) < 2:
+                raise ScenarioError(f'{where}: a string must be "=TYPE" (the same count as TYPE)')
+            members[kind] = value
+        else:
+            members[kind] = _counts(value, where, 0, MAX_MEMBERS)
+    return members
 
 
-def _choice(value: str, choices: tuple[str, ...], where: str) -> None:
+def _placements(section: dict[str, Any]) -> dict[str, Placement]:
+    placement = {}
+    for kind, value in section.items():
+        where = jsonfile.key_path("$.placement", kind)
+        item = jsonfile.expect_object(value, where)
+        jsonfile.check_keys(item, {"layout", "spacing", "headings"}, where)
+        placement[kind] = Placement(
+            _choice_at(item, "layout", "south", LAYOUTS, where),
+            _number(item, "spacing", 4.0, where, 0.0, float(MAX_SIDE)),
+            _choice_at(item, "headings", "fan", HEADINGS, where),
+        )
+    return placement
+
+
+def _choice_at(
+    obj: dict[str, Any], key: str, default: str, choices: tuple[str, ...], base: str
+) -> str:
+    where = jsonfile.key_path(base, key)
+    value = jsonfile.expect_str(obj.get(key, default), where)
     if value not in choices:
-        raise ScenarioError(f"{where} '{value}': choose one of {', '.join(choices)}")
+        raise ScenarioError(f"{where}: '{value}': choose one of {', '.join(choices)}")
+    return value
+
+
+def _positions(value: Any, width: int, height: int) -> list[tuple[int, int]] | None:
+    if value is None:
+        return None
+    items = jsonfile.expect_list(value, "$.target_positions")
+    if len(items) > min(MAX_TARGETS, width * height):
+        raise ScenarioError(f"$.target_positions: more targets than patches ({width * height:,})")
+    positions = []
+    for i, item in enumerate(items):
+        where = f"$.target_positions[{i}]"
+        if not isinstance(item, list) or len(item) != 2:
+            raise ScenarioError(f"{where}: expected a patch [x, y], {jsonfile.got(item)}")
+        x = jsonfile.expect_int(item[0], f"{where}[0]", 0, width - 1)
+        y = jsonfile.expect_int(item[1], f"{where}[1]", 0, height - 1)
+        positions.append((x, y))
+    if len(set(positions)) != len(positions):
+        raise ScenarioError("$.target_positions: two targets on the same patch")
+    return positions
+
+
+def _station(value: Any) -> list[StationEvent]:
+    items = jsonfile.expect_list(value, "$.station")
+    if len(items) > MAX_LIST:
+        raise ScenarioError(f"$.station: more than {MAX_LIST:,} events")
+    station = []
+    for i, item in enumerate(items):
+        where = f"$.station[{i}]"
+        entry = jsonfile.expect_object(item, where)
+        jsonfile.check_keys(entry, {"tick", "event", "data"}, where)
+        if "event" not in entry:
+            raise ScenarioError(f"{where}: needs `event` (and `tick`)")
+        data = entry.get("data")
+        if data is not None:
+            jsonfile.expect_object(data, f"{where}.data")
+        station.append(
+            StationEvent(
+                _int(entry, "tick", 0, where, 0, MAX_TICKS),
+                jsonfile.expect_str(entry["event"], f"{where}.event", empty=False),
+                data,
+            )
+        )
+    return station
+
+
+def _timing(section: dict[str, Any]) -> dict[str, int]:
+    timing = dict(TIMING_DEFAULTS)
+    for key in section:
+        if key == "tick_ms":
+            timing[key] = _int(section, key, 1000, "$.timing", 1, MAX_TICK_MS)
+        else:
+            timing[key] = _int(section, key, 0, "$.timing", 0, MAX_TICKS)
+    return timing
+
+
+def _library(section: dict[str, Any]) -> dict[str, str]:
+    return {
+        k: jsonfile.expect_str(v, jsonfile.key_path("$.library", k), empty=False)
+        for k, v in section.items()
+    }
+
+
+def _fractions(top: dict[str, Any], key: str, default: list[float]) -> list[float]:
+    items = jsonfile.expect_list(top.get(key, default), f"$.{key}", empty=False)
+    if len(items) > MAX_LIST:
+        raise ScenarioError(f"$.{key}: more than {MAX_LIST:,} levels")
+    return [
+        jsonfile.expect_number(v, f"$.{key}[{i}]", 0.0, 1.0, above=False)
+        for i, v in enumerate(items)
+    ]
+
+
+# --- the command line, and the limits of a whole sweep
 
 
 def parse_members(text: str) -> dict[str, list[int]]:
@@ -344,18 +415,75 @@ def parse_members(text: str) -> dict[str, list[int]]:
     for part in text.replace(";", " ").split():
         kind, sep, counts = part.partition("=")
         if not sep or not kind:
-            raise ScenarioError(f"--members {part!r}: write TYPE=COUNT[,COUNT...]")
-        found[kind] = parse_counts(counts, f"--members {kind}")
+            raise ScenarioError(f"--members {shown(part)!r}: write TYPE=COUNT[,COUNT...]")
+        found[kind] = parse_counts(counts, f"--members {shown(kind)}", 0, MAX_MEMBERS)
+    if not found:
+        raise ScenarioError("--members: write TYPE=COUNT[,COUNT...]")
     return found
 
 
-def parse_counts(text: str, where: str) -> list[int]:
+def parse_counts(text: str, where: str, low: int = 0, high: int = MAX_TARGETS) -> list[int]:
+    """`1,2,4` as counts in [low, high] (the limits are checked before anything runs)."""
+    words = [v.strip() for v in text.split(",") if v.strip()]
+    if len(words) > MAX_LIST:
+        raise ScenarioError(f"{where}: more than {MAX_LIST:,} counts")
     try:
-        values = [int(v) for v in text.split(",") if v.strip()]
+        values = [int(v) for v in words if v.isascii() and len(v) <= 20]
     except ValueError:
-        raise ScenarioError(
-            f"{where}: {text!r} is not a comma-separated list of integers"
-        ) from None
-    if not values or any(v < 0 for v in values):
-        raise ScenarioError(f"{where}: give one or more counts >= 0")
+        values = []
+    if not words or len(values) != len(words):
+        raise ScenarioError(f"{where}: {shown(text)!r} is not a comma-separated list of integers")
+    for value in values:
+        if not low <= value <= high:
+            raise ScenarioError(f"{where}: {value} is not a count from {low:,} to {high:,}")
     return values
+
+
+def check(scenario: Scenario, types: Sequence[str], defaults: Mapping[str, int]) -> None:
+    """The limits of the whole sweep, before anything runs: `types` are the model's member
+    types with a state machine, `defaults` their swarm composition."""
+    for kind in scenario.given:
+        if kind not in types:
+            close = difflib.get_close_matches(kind, types, n=1)
+            hint = f"; did you mean {close[0]}?" if close else ""
+            raise ScenarioError(
+                f"--members {shown(kind)}: the model has no such member type{hint} "
+                f"(it has: {', '.join(types)})"
+            )
+    sweeps: list[list[int]] = []
+    for kind in types:
+        spec = scenario.members.get(kind)
+        if isinstance(spec, list):
+            sweeps.append(spec)
+        elif spec is None:
+            sweeps.append([defaults.get(kind, 1)])
+    largest = sum(max(s) for s in sweeps) if sweeps else 0
+    follow = [s for s in scenario.members.values() if isinstance(s, str)]
+    for spec in follow:  # "=UAV" doubles that type's count (at most)
+        other = scenario.members.get(spec[1:])
+        largest += max(other) if isinstance(other, list) else defaults.get(spec[1:], 0)
+    _check_sweep(scenario, math.prod(len(s) for s in sweeps), largest)
+    if sweeps and all(0 in s for s in sweeps):
+        raise ScenarioError("a configuration of the sweep has no members: nothing to simulate")
+
+
+def _check_sweep(scenario: Scenario, combinations: int, members: int) -> None:
+    reps, patches = scenario.reps, scenario.width * scenario.height
+    configurations = combinations * len(scenario.targets)
+    problems = [
+        (members, "members in a configuration", MAX_MEMBERS),
+        (members * reps, f"members x repetitions ({members:,} x {reps:,})", MAX_MEMBER_RUNS),
+        (patches * reps, f"patches x repetitions ({patches:,} x {reps:,})", MAX_PATCH_RUNS),
+        (configurations * reps, f"runs ({configurations:,} configurations x {reps:,})", MAX_RUNS),
+    ]
+    for value, what, limit in problems:
+        if value > limit:
+            raise ScenarioError(
+                f"{value:,} {what}: more than the limit of {limit:,} (docs/simulate.md)"
+            )
+    if max(scenario.targets) > patches:
+        raise ScenarioError(
+            f"{max(scenario.targets):,} targets: more than the {patches:,} patches of the world"
+        )
+    if scenario.max_ticks * scenario.timing["tick_ms"] * 1_000_000 > _STAMP_NS:
+        raise ScenarioError("max_ticks x tick_ms: the last tick is beyond 292 years of time")

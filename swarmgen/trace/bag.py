@@ -34,6 +34,9 @@ from __future__ import annotations
 import dataclasses
 import json
 import re
+import shutil
+import sqlite3
+import struct
 import threading
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -42,6 +45,7 @@ from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Protocol
 
+from swarmgen.console import shown
 from swarmgen.ros.interfaces import ACTIVE_STATES_MSG, EVENT_MSG
 
 if TYPE_CHECKING:
@@ -210,11 +214,13 @@ class BagRecorder:
         self._last_states: dict[str, tuple[str, ...]] = {}
         self._seen: set[tuple[str, int, str, int]] = set()
         plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
-        self._writer: Writer | None = Writer(self.path, version=9, storage_plugin=plugin)
         try:
+            self._writer: Writer | None = Writer(self.path, version=9, storage_plugin=plugin)
             self._writer.open()
         except WriterError as err:
-            raise TraceError(f"cannot record into {self.path}: {err}") from None
+            raise TraceError(f"cannot record into {shown(self.path)}: {err}") from None
+        except OSError as err:  # a file in the way, a read-only directory, a too long name
+            raise TraceError(f"cannot record into {shown(self.path)}: {err.strerror}") from None
         self._connection(EVENTS_TOPIC, self.event_type)
 
     # --- lifecycle
@@ -350,30 +356,41 @@ def record_replay(
     1 ms. The same scenario and trace give a byte-identical bag.
     """
     path = Path(path)
-    with BagRecorder(path, storage=storage, clock=VirtualClock()) as recorder:
-        records = {int(r.get("step", i)): r for i, r in enumerate(trace)}
-        if 0 in records:
-            recorder.record_states(member, records[0].get("active", ()), 0)
-        for number, step in enumerate(steps, start=1):
-            base = number * STEP_NS
-            items = _expand(step)
-            for k, item in enumerate(items):
-                stamp = base + k * BURST_NS
-                if "complete" in item:
-                    name = f"{item['complete']}.{item.get('outcome', 'succeeded')}"
-                    outputs = dict(item.get("outputs") or {})
-                    if item.get("state") is not None:
-                        outputs.setdefault("state", item["state"])
-                    recorder.record_event(name, outputs, "replay", stamp)
-                else:
-                    recorder.record_event(
-                        str(item.get("event")), item.get("data"), "station", stamp
-                    )
-            if number in records:
-                recorder.record_states(
-                    member, records[number].get("active", ()), base + len(items) * BURST_NS
-                )
+    try:
+        with BagRecorder(path, storage=storage, clock=VirtualClock()) as recorder:
+            _write_replay(recorder, member, steps, trace)
+    except OSError as err:  # e.g. the disk filled up: remove the half bag this call created
+        shutil.rmtree(path, ignore_errors=True)
+        raise TraceError(f"cannot record into {shown(path)}: {err.strerror or err}") from None
     return path
+
+
+def _write_replay(
+    recorder: BagRecorder,
+    member: str,
+    steps: Sequence[Mapping[str, Any]],
+    trace: Sequence[Mapping[str, Any]],
+) -> None:
+    records = {int(r.get("step", i)): r for i, r in enumerate(trace)}
+    if 0 in records:
+        recorder.record_states(member, records[0].get("active", ()), 0)
+    for number, step in enumerate(steps, start=1):
+        base = number * STEP_NS
+        items = _expand(step)
+        for k, item in enumerate(items):
+            stamp = base + k * BURST_NS
+            if "complete" in item:
+                name = f"{item['complete']}.{item.get('outcome', 'succeeded')}"
+                outputs = dict(item.get("outputs") or {})
+                if item.get("state") is not None:
+                    outputs.setdefault("state", item["state"])
+                recorder.record_event(name, outputs, "replay", stamp)
+            else:
+                recorder.record_event(str(item.get("event")), item.get("data"), "station", stamp)
+        if number in records:
+            recorder.record_states(
+                member, records[number].get("active", ()), base + len(items) * BURST_NS
+            )
 
 
 # --- reading
@@ -502,22 +519,38 @@ def is_bag(path: Path) -> bool:
     return path.is_file() and path.suffix in BAG_SUFFIXES
 
 
-def find_bags(path: Path | str) -> list[Path]:
+def find_bags(path: Path | str, seen: set[tuple[int, int]] | None = None) -> list[Path]:
     """`path` itself if it is a bag (a rosbag2 directory, a .bag, .mcap or .db3 file), else every
-    bag below the directory `path`, sorted by path (bag directories are not searched inside)."""
+    bag below the directory `path`, sorted by path (bag directories are not searched inside).
+
+    Symlinks are followed, but every real directory and bag once (by device and inode, in
+    `seen`): a link back up the tree or a second link to a bag cannot count a run twice."""
     path = Path(path)
-    if not path.exists():
-        raise TraceError(f"{path}: no such file or directory")
-    if is_bag(path):
-        return [path]
-    if not path.is_dir():
-        raise TraceError(f"{path}: not a bag (a rosbag2 directory, .bag, .mcap or .db3 file)")
+    seen = set() if seen is None else seen
+    try:
+        if not path.exists():
+            raise TraceError(f"{shown(path)}: no such file or directory")
+        info = path.stat()
+        if (info.st_dev, info.st_ino) in seen:
+            return []
+        seen.add((info.st_dev, info.st_ino))
+        if is_bag(path):
+            return [path]
+        if not path.is_dir():
+            raise TraceError(
+                f"{shown(path)}: not a bag (a rosbag2 directory, .bag, .mcap or .db3 file)"
+            )
+        children = sorted(path.iterdir())
+    except OSError as err:
+        raise TraceError(f"{shown(path)}: cannot read: {err.strerror or err}") from None
     found: list[Path] = []
-    for child in sorted(path.iterdir()):
-        if is_bag(child):
-            found.append(child)
-        elif child.is_dir():
-            found.extend(b for b in find_bags(child))
+    for child in children:
+        try:
+            searched = is_bag(child) or child.is_dir()
+        except OSError as err:
+            raise TraceError(f"{shown(child)}: cannot read: {err.strerror or err}") from None
+        if searched:
+            found.extend(find_bags(child, seen))
     return found
 
 
@@ -529,9 +562,7 @@ def _field_names(store: Typestore, msgtype: str) -> frozenset[str]:
 def _read_bag(
     path: Path, aliases: Mapping[str, str]
 ) -> tuple[int | None, list[tuple[int, int, RecordedEvent]], list[StateChange]]:
-    from rosbags.highlevel import AnyReader, AnyReaderError
-    from rosbags.rosbag1 import ReaderError as Reader1Error
-    from rosbags.rosbag2 import ReaderError as Reader2Error
+    from rosbags.highlevel import AnyReader
 
     events: list[tuple[int, int, RecordedEvent]] = []
     states: list[StateChange] = []
@@ -558,9 +589,33 @@ def _read_bag(
                 event = _event(message, connection.topic, stamp, legacy)
                 event = dataclasses.replace(event, name=aliases.get(event.name, event.name))
                 events.append((stamp, order, event))
-    except (AnyReaderError, Reader1Error, Reader2Error, ValueError, KeyError) as err:
-        raise TraceError(f"{path}: cannot read the bag: {err}") from None
+    except _corrupt() as err:
+        lines = str(err).strip().splitlines() or [type(err).__name__]
+        raise TraceError(f"{shown(path)}: cannot read the bag: {shown(lines[0])}") from None
     return start, events, states
+
+
+@cache
+def _corrupt() -> tuple[type[BaseException], ...]:
+    """What reading a corrupt or truncated bag raises (found by truncating real mcap and sqlite3
+    bags at every length and flipping random bytes): rosbags' own errors, and from below it
+    struct, sqlite (apsw) and I/O errors, TypeError for a blob stored as text, and MemoryError
+    or OverflowError for a length field of 2**60 in a 6 KB file. Only the reading of one bag
+    is guarded by it."""
+    from rosbags.highlevel import AnyReaderError
+    from rosbags.rosbag1 import ReaderError as Reader1Error
+    from rosbags.rosbag2 import ReaderError as Reader2Error
+
+    found: list[type[BaseException]] = [AnyReaderError, Reader1Error, Reader2Error]
+    found += [ValueError, KeyError, IndexError, TypeError, EOFError, OSError, struct.error]
+    found += [OverflowError, MemoryError, sqlite3.Error]
+    try:
+        import apsw
+
+        found.append(apsw.Error)
+    except ModuleNotFoundError:
+        pass
+    return tuple(found)
 
 
 def _event(
@@ -606,15 +661,20 @@ def read_run(bags: Sequence[Path | str], aliases: Mapping[str, str] | None = Non
 
 
 def read_events(paths: Iterable[Path | str], aliases: Mapping[str, str] | None = None) -> list[Run]:
-    """One `Run` per bag: each path is a bag, or a directory searched for bags (`find_bags`).
+    """One `Run` per bag: each path is a bag, or a directory searched for bags (`find_bags`;
+    a bag reached twice, through links or by naming it twice, is one run).
 
     `aliases` renames events after reading (e.g. {"targetDone": "targetRescued"} to compare
     legacy bags with the paper's names).
     """
     runs: list[Run] = []
+    seen: set[tuple[int, int]] = set()
     for path in paths:
-        bags = find_bags(path)
-        if not bags:
-            raise TraceError(f"{path}: no bags in this directory")
+        if not str(path):
+            raise TraceError("an empty path: give a bag or a directory of bags")
+        known = len(seen)
+        bags = find_bags(path, seen)
+        if not bags and len(seen) > known:  # a new directory without bags (not one seen before)
+            raise TraceError(f"no bags found in {shown(path)}")
         runs.extend(read_run([bag], aliases) for bag in bags)
     return runs

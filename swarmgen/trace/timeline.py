@@ -32,6 +32,7 @@ __all__ = [
     "build",
     "csv_text",
     "plot",
+    "render",
     "summarize",
     "table",
 ]
@@ -170,16 +171,24 @@ def csv_text(timeline: Timeline) -> str:
 
 
 def plot(timeline: Timeline, path: Path, *, title: str | None = None) -> None:
+    """`render` into the file `path`: PNG or SVG by its suffix (its directory is made)."""
+    suffix = path.suffix.lower()
+    if suffix not in PLOT_FORMATS:
+        raise ValueError(f"{path}: the plot is .png or .svg")
+    data = render(timeline, suffix[1:], title=title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(data)
+
+
+def render(timeline: Timeline, fmt: str, *, title: str | None = None) -> bytes:
     """A horizontal box plot like the paper's demonstration figure: one box per event, events
-    from top to bottom in timeline order, time since launch on x. PNG or SVG by the suffix; the
-    SVG is deterministic (fixed hash salt, no date)."""
+    from top to bottom in timeline order, time since launch on x; `fmt` "png" or "svg" (the
+    SVG is deterministic: fixed hash salt, no date). Made in memory, so that a command can
+    check everything before it writes a file."""
     import matplotlib
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    suffix = path.suffix.lower()
-    if suffix not in PLOT_FORMATS:
-        raise ValueError(f"{path}: the plot is .png or .svg")
     count = len(timeline.events)
     figure = Figure(figsize=(8.0, 1.2 + 0.45 * max(count, 1)), layout="constrained")
     FigureCanvasAgg(figure)
@@ -220,9 +229,10 @@ def plot(timeline: Timeline, path: Path, *, title: str | None = None) -> None:
     axes.set_xlabel("time since launch [s]")
     axes.grid(axis="x", linestyle=":", linewidth=0.6)
     axes.set_title(title or f"Events over {timeline.total_runs} run(s)")
-    path.parent.mkdir(parents=True, exist_ok=True)
+    buffer = io.BytesIO()
     with matplotlib.rc_context({"svg.hashsalt": _SVG_SALT, "svg.fonttype": "path"}):
-        if suffix == ".svg":
-            figure.savefig(path, format="svg", metadata={"Date": None})
+        if fmt == "svg":
+            figure.savefig(buffer, format="svg", metadata={"Date": None})
         else:
-            figure.savefig(path, format="png", dpi=120)
+            figure.savefig(buffer, format="png", dpi=120)
+    return buffer.getvalue()
