@@ -137,6 +137,73 @@ MACHINE_TOO_DEEP = _code("SG121", "nesting-too-deep", "states nested deeper than
 BAD_DEFAULT = _code(
     "SG122", "bad-default-value", "a default value generated code cannot represent exactly"
 )
+# --- limits on the work a small model may ask for (SG130-SG139)
+MODEL_TOO_LARGE = _code(
+    "SG130", "model-too-large", "a machine is too large once its submachines are inlined"
+)
+TOO_MANY_MEMBERS = _code(
+    "SG131", "too-many-members", "a swarm has more members of one type than the limit"
+)
+NONDETERMINISM_UNDECIDED = _code(
+    "SG132",
+    "nondeterminism-undecided",
+    "SG204 could not decide some pairs of guards within its budget",
+    Severity.NOTE,
+)
+# --- well-formedness of machines and classes (SG140-SG159): models that would compile wrong
+UNEXPECTED_ELEMENT = _code(
+    "SG140", "unexpected-element", "an element of a kind that does not belong where it stands"
+)
+SEVERAL_REFS = _code(
+    "SG141", "several-references", "a single-valued reference names more than one element"
+)
+INITIAL_LEAVES_REGION = _code(
+    "SG142", "initial-leaves-region", "an initial or default history transition leaves its region"
+)
+ENTERS_INITIAL = _code("SG143", "enters-initial", "a transition targets an initial pseudostate")
+BAD_FORK = _code(
+    "SG144", "bad-fork", "fork targets that are not in distinct orthogonal regions of one state"
+)
+BAD_JOIN = _code(
+    "SG145", "bad-join", "join sources not in distinct orthogonal regions, or no single way out"
+)
+SINGLE_BRANCH = _code(
+    "SG146", "single-branch", "a fork or join with a single branch", Severity.WARNING
+)
+CHOICE_WITHOUT_ELSE = _code(
+    "SG147", "choice-without-else", "a choice or junction whose guards can all be false"
+)
+BAD_OUTCOME_NAME = _code(
+    "SG148", "bad-outcome-name", "an outcome name that is not a plain identifier"
+)
+GENERALISATION_CYCLE = _code(
+    "SG149", "generalisation-cycle", "a class specialises itself, directly or not"
+)
+COMPOSITION_CYCLE = _code(
+    "SG150", "composition-cycle", "a class is a part of itself or a data type contains itself"
+)
+RESERVED_FILE_NAME = _code(
+    "SG151", "reserved-file-name", "a generated file name that Windows reserves", Severity.WARNING
+)
+PATH_TOO_LONG = _code(
+    "SG152", "path-too-long", "a generated path too long for Windows", Severity.WARNING
+)
+BAD_FINAL_STATE = _code(
+    "SG153", "bad-final-state", "a final state with regions, behaviours or a submachine"
+)
+UNKNOWN_KIND = _code(
+    "SG154", "unknown-kind", "a pseudostate or transition kind that UML does not define"
+)
+BAD_INTERNAL = _code(
+    "SG155", "bad-internal-transition", "an internal transition whose source and target differ"
+)
+SUBMACHINE_WITH_REGIONS = _code(
+    "SG156", "submachine-with-regions", "a submachine state that has regions of its own"
+)
+DUPLICATE_REGION_NAME = _code(
+    "SG157", "duplicate-region-name", "two regions of one state share a name", Severity.WARNING
+)
+LIVELOCK = _code("SG160", "livelock", "transitions that loop forever without an external event")
 # --- analysis: swarm bugs before flight
 UNREACHABLE_STATE = _code(
     "SG201",

@@ -14,6 +14,9 @@ the corners of the semantics (`ScenarioMaker.edge_scenarios`):
 - submachine completion: a submachine state run to its final state by its behaviours' outcomes;
 - mixed bursts: a behaviour's outcome queued back to back with a swarm or station event, and
   the outcomes of two parallel behaviours together.
+- near livelocks: every input that runs the transitions of a potential microstep cycle (the
+  step bound's, docs/semantics.md), alone, twice back to back, and followed by noise (each
+  external event starts the bound's count again).
 
 Values come from the guards: `GuardValues` walks the guard expressions (swarmgen.ir.expr) for
 the constants each member datum, output and event field is compared against, divisors (zero)
@@ -130,7 +133,11 @@ def skeleton(chart: c.Chart) -> Engine:
             add(child, node.id)
         for transition in node.transitions:
             builder.transition(
-                node.id, transition.events, transition.targets, action=raising(transition.actions)
+                node.id,
+                transition.events,
+                transition.targets,
+                action=raising(transition.actions),
+                bounded=transition.bounded,  # else an unguarded cycle would spin in the guide
             )
 
     for node in chart.children:
@@ -789,6 +796,30 @@ class ScenarioMaker:
                 scenarios.append(self._tail([*prefix, {"burst": [second, first, *third]}]))
         return _limit(scenarios, self.rng)
 
+    def near_livelocks(self) -> list[Scenario]:
+        """From each configuration explored: every input after which the guide took bounded
+        transitions (a potential microstep cycle ran, up to the step bound or not), alone,
+        twice back to back, and followed by an event of the model (the count starts again)."""
+        if not any(t.bounded for n in self.chart.walk() for t in n.transitions):
+            return []
+        scenarios: list[Scenario] = []
+        for _config_key, prefix in sorted(self.explore().items(), key=lambda kv: len(kv[1])):
+            engine = self.replayed(prefix)
+            if not engine.running:
+                continue
+            for step in self.branching_steps(engine) or [
+                self.event_step(e) for e in self.event_names
+            ]:
+                after = self.replayed(prefix)
+                follow(after, step)
+                if after.bounded_steps == 0:
+                    continue
+                scenarios.append([*prefix, step, step])
+                scenarios.append([*prefix, {"burst": [step, step]}])
+                noise = [self.event_step(e) for e in self.event_names[:1]]
+                scenarios.append(self._tail([*prefix, step, *noise]))
+        return _limit(scenarios, self.rng)
+
     def _interesting_complete(self, node: c.Node) -> Step:
         assert node.call is not None
         info = self.behaviours[node.call.behaviour]
@@ -812,6 +843,7 @@ class ScenarioMaker:
             *self.history_reentry(),
             *self.submachine_completion(),
             *self.mixed_bursts(),
+            *self.near_livelocks(),
         ]
 
 

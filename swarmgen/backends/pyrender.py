@@ -165,6 +165,8 @@ class ChartRenderer:
             options.append(f"action={action}")
         if transition.internal:
             options.append("internal=True")
+        if transition.bounded:  # the step bound counts it (docs/semantics.md)
+            options.append("bounded=True")
         head = (
             f"b.transition({source!r}, {tuple(transition.events)!r}, {tuple(transition.targets)!r}"
         )

@@ -268,6 +268,8 @@ class SmachRenderer(ChartRenderer):
                 options.append(f"action={action}")
             if transition.internal:
                 options.append("internal=True")
+            if transition.bounded:  # the step bound counts it (docs/semantics.md)
+                options.append("bounded=True")
             plain = len(keys) == 1 and not keys[0].startswith("smach.")
             simple = simple and plain and len(targets) == 1 and not options
             specs.append((keys, targets, options))

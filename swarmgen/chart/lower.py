@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 from swarmgen.chart import model as c
 from swarmgen.chart import values
+from swarmgen.chart.cycles import bound_cycles
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import (
     Behaviour,
@@ -74,7 +75,7 @@ def lower(model: Model) -> tuple[c.Chart, ...]:
     lower the same model."""
     if _LAST and _LAST[0][0] is model:
         return _LAST[0][1]
-    charts = _lower(model)
+    charts = tuple(bound_cycles(chart) for chart in _lower(model))  # the step bound's marks
     _LAST[:] = [(model, charts)]
     return charts
 

@@ -97,6 +97,8 @@ class Transition:
     actions: tuple[Action, ...] = ()
     name: str | None = None  # the model's transition name, when meaningful
     join: str | None = None  # the join pseudostate this transition stands for
+    # on a potential microstep cycle: the step bound counts it (docs/semantics.md, `cycles`)
+    bounded: bool = False
 
 
 def takes_outcome(events: tuple[str, ...], state_id: str) -> bool:

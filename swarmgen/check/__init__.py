@@ -9,8 +9,10 @@ from swarmgen.check.determinism import check_determinism
 from swarmgen.check.events import check_events, check_unhandled_outcomes
 from swarmgen.check.expressions import check_expressions
 from swarmgen.check.hardware import check_capabilities, check_parameters
-from swarmgen.check.naming import check_collisions
+from swarmgen.check.livelock import check_livelocks
+from swarmgen.check.naming import check_collisions, check_output_paths
 from swarmgen.check.reachability import check_reachability
+from swarmgen.check.size import check_size
 from swarmgen.check.structure import (
     check_initial_states,
     check_outcomes,
@@ -19,6 +21,7 @@ from swarmgen.check.structure import (
 )
 from swarmgen.check.swarm import check_counts, check_ros_names
 from swarmgen.check.types import check_types
+from swarmgen.check.wellformed import check_wellformed
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model
 
@@ -26,12 +29,16 @@ Rule = Callable[[Model], list[Diagnostic]]
 
 RULES: tuple[Rule, ...] = (
     check_submachines,
+    check_size,
     check_initial_states,
     check_pseudostates,
+    check_wellformed,
     check_outcomes,
     check_expressions,
     check_collisions,
+    check_output_paths,
     check_reachability,
+    check_livelocks,
     check_determinism,
     check_unhandled_outcomes,
     check_events,
@@ -48,5 +55,8 @@ def run(model: Model) -> list[Diagnostic]:
     """Every rule's findings, in rule order (the pipeline sorts them by position)."""
     found: list[Diagnostic] = []
     for rule in RULES:
-        found.extend(rule(model))
+        findings = rule(model)
+        found.extend(findings)
+        if rule is check_size and findings:
+            break  # the later rules would inline the machine (data flow lowers it)
     return found

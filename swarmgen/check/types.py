@@ -36,6 +36,13 @@ def category(type_name: str | None, datatypes: set[str]) -> str | None:
     return type_name if type_name in datatypes else None
 
 
+def _text(e: expr.Expr, limit: int = 80) -> str:
+    """The expression for a message, clipped: a long guard with many errors would otherwise
+    print each of its ever larger subexpressions whole."""
+    text = expr.to_text(e)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 def _word(kind: str) -> str:
     return _WORDS.get(kind, f"a {kind}")
 
@@ -66,9 +73,7 @@ class _Typer:
             if e.op == "not":
                 return "bool"
             if operand is not None and operand != "number":
-                self.errors.append(
-                    f"'{e.op}' needs a number, not {_word(operand)}: `{expr.to_text(e)}`"
-                )
+                self.errors.append(f"'{e.op}' needs a number, not {_word(operand)}: `{_text(e)}`")
             return "number"
         if isinstance(e, expr.Binary):
             return self._binary(e)
@@ -81,29 +86,28 @@ class _Typer:
         if owner in self.scope.datatype_fields:
             fields = self.scope.datatype_fields[owner]
             if e.name not in fields:
-                self.errors.append(f"{_word(owner)} has no field '{e.name}': `{expr.to_text(e)}`")
+                self.errors.append(f"{_word(owner)} has no field '{e.name}': `{_text(e)}`")
             return fields.get(e.name)
-        self.errors.append(f"{_word(owner)} has no field '{e.name}': `{expr.to_text(e)}`")
+        self.errors.append(f"{_word(owner)} has no field '{e.name}': `{_text(e)}`")
         return None
 
     def _binary(self, e: expr.Binary) -> str | None:
         left, right = self.infer(e.left), self.infer(e.right)
-        text = expr.to_text(e)
         if e.op in {"and", "or"}:
             return "bool"
         if e.op in {"==", "!="}:
             if left and right and left != right and "null" not in (left, right):
                 self.errors.append(
-                    f"comparing {_word(left)} with {_word(right)} is always {e.op == '!='}: `{text}`"
+                    f"comparing {_word(left)} with {_word(right)} is always {e.op == '!='}: `{_text(e)}`"
                 )
             return "bool"
         allowed = {"number", "string"} if e.op in _ORDER or e.op == "+" else {"number"}
         for side in (left, right):
             if side is not None and side not in allowed:
-                self.errors.append(f"'{e.op}' cannot take {_word(side)}: `{text}`")
+                self.errors.append(f"'{e.op}' cannot take {_word(side)}: `{_text(e)}`")
                 return None if e.op in _ARITHMETIC else "bool"
         if left and right and left != right:
-            self.errors.append(f"'{e.op}' between {_word(left)} and {_word(right)}: `{text}`")
+            self.errors.append(f"'{e.op}' between {_word(left)} and {_word(right)}: `{_text(e)}`")
             return None if e.op in _ARITHMETIC else "bool"
         if e.op in _ORDER:
             return "bool"

@@ -17,11 +17,16 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend.raw import RawElement, RawModel, StereotypeApplication
+from swarmgen.inputs import InputRefused, read_limited
 from swarmgen.span import Span
 
 MAX_BYTES = 64 * 1024 * 1024
 MAX_DEPTH = 200
 MAX_ELEMENTS = 3_000_000
+# lxml reads each attribute value by a linear search of its element's attributes, so reading an
+# element's attributes costs the square of their number (100,000 took 40 s). Exports carry fewer
+# than 20 per element; 256 keeps the cost per byte of input that of an ordinary model.
+MAX_ATTRIBUTES = 256
 
 # EMF leaves out xmi:type when it equals the feature's declared type (formats.md 1.2).
 _DEFAULT_TYPES = {
@@ -74,9 +79,9 @@ def load(path: Path) -> tuple[RawModel | None, list[Diagnostic]]:
         data = _read_bounded(path, shown)
         tree = _parse_safely(data, shown)
         _check_root(tree, shown)
+        text = _decoded(data, tree.docinfo.encoding or "utf-8", shown)
     except InputError as err:
         return None, [err.diagnostic]
-    text = data.decode(tree.docinfo.encoding or "utf-8", errors="replace")
     ctx = _Context(shown, text.splitlines(), [], {}, {})
     root = tree.getroot()
     try:
@@ -87,28 +92,29 @@ def load(path: Path) -> tuple[RawModel | None, list[Diagnostic]]:
 
 
 def _read_bounded(path: Path, shown: str) -> bytes:
+    """The file's bytes, read with the size limit enforced while reading: a FIFO, a device or a
+    /proc file (which report a size of 0) would otherwise be read forever."""
     span = Span(file=shown)
     try:
-        if path.is_dir():
-            raise InputError(dg.diag(dg.UNREADABLE, "is a directory, not a model file", span))
-        size = path.stat().st_size
-        if size > MAX_BYTES:
-            raise InputError(
-                dg.diag(
-                    dg.TOO_LARGE,
-                    f"file is {size / 2**20:.0f} MiB; the limit is {MAX_BYTES // 2**20} MiB",
-                    span,
-                    hint="split the model into smaller files",
-                )
-            )
-        data = path.read_bytes()
-    except FileNotFoundError:
-        raise InputError(dg.diag(dg.UNREADABLE, "no such file", span)) from None
-    except OSError as err:
-        raise InputError(dg.diag(dg.UNREADABLE, f"cannot read: {err.strerror}", span)) from None
+        data = read_limited(path, MAX_BYTES)
+    except InputRefused as err:
+        if str(err).startswith("is larger than"):
+            raise InputError(_too_large(path, span)) from None
+        raise InputError(dg.diag(dg.UNREADABLE, str(err), span)) from None
     if not data.strip():
         raise InputError(dg.diag(dg.UNREADABLE, "file is empty", span))
     return data
+
+
+def _too_large(path: Path, span: Span) -> Diagnostic:
+    limit = f"the limit is {MAX_BYTES // 2**20} MiB"
+    try:
+        size = f"file is {path.stat().st_size / 2**20:.0f} MiB"
+    except OSError:
+        size = "file is too large"
+    return dg.diag(
+        dg.TOO_LARGE, f"{size}; {limit}", span, hint="split the model into smaller files"
+    )
 
 
 def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
@@ -124,11 +130,15 @@ def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
     head = text[:4096].lstrip()
     if b"<!DOCTYPE" in head or b"<!ENTITY" in text:
         raise InputError(_forbidden_dtd(shown, _line_of(text, b"<!")))
+    _check_declared_encoding(head, shown)
     try:
         tree = etree.ElementTree(etree.fromstring(data, parser))
     except etree.XMLSyntaxError as err:
         line, col = err.position or (0, 0)  # libxml2 columns are 1-based already
         message = _POSITION_SUFFIX.sub("", str(err.msg or err).split(" (line")[0])
+        if message.startswith("Unsupported encoding"):  # a name Python knows, libxml2 not
+            name = message.partition(":")[2].strip()
+            raise InputError(_bad_encoding(name, shown, _encoding_col(head))) from None
         raise InputError(
             dg.diag(
                 dg.NOT_XML,
@@ -150,6 +160,60 @@ def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
                 )
             )
     return tree
+
+
+# The XML declaration's encoding name (on the ASCII-compatible text, see _ascii_compatible).
+_DECLARED_ENCODING = re.compile(rb"^<\?xml\s[^>]*?\bencoding\s*=\s*([\"'])(.*?)\1")
+
+
+def _check_declared_encoding(head: bytes, shown: str) -> None:
+    """An encoding name that Python cannot decode is refused before parsing: libxml2 (iconv)
+    knows names Python does not (ARMSCII-8, TCVN), and the source text is decoded again for
+    columns and excerpts."""
+    match = _DECLARED_ENCODING.match(head)
+    if match is None:
+        return
+    name = match.group(2).decode("ascii", errors="replace")
+    if _text_codec(name) is None:
+        raise InputError(_bad_encoding(name, shown, match.start(2) + 1))
+
+
+def _encoding_col(head: bytes) -> int:
+    match = _DECLARED_ENCODING.match(head)
+    return match.start(2) + 1 if match else 1
+
+
+def _text_codec(name: str) -> codecs.CodecInfo | None:
+    """The codec of a text encoding name, None for an unknown one or a bytes-to-bytes codec
+    (`rot13`, `base64`): `bytes.decode` refuses those too."""
+    try:
+        info = codecs.lookup(name) if name.strip() else None
+    except (LookupError, ValueError):  # ValueError: a NUL in the name
+        return None
+    return info if info is not None and getattr(info, "_is_text_encoding", True) else None
+
+
+def _bad_encoding(name: str, shown: str, col: int) -> Diagnostic:
+    what = f"unsupported encoding {_quoted(name)}" if name.strip() else "an empty encoding name"
+    return dg.diag(
+        dg.NOT_XML,
+        f"the XML declaration names {what}",
+        Span(file=shown, line=1, col=max(col, 1)),
+        hint='save the model as UTF-8 (<?xml version="1.0" encoding="UTF-8"?>)',
+    )
+
+
+def _quoted(text: str, limit: int = 40) -> str:
+    clipped = text if len(text) <= limit else text[: limit - 1] + "…"
+    return "'" + "".join(c if c.isprintable() else "?" for c in clipped) + "'"
+
+
+def _decoded(data: bytes, encoding: str, shown: str) -> str:
+    """The source text for columns and excerpts, in the encoding libxml2 used."""
+    try:
+        return data.decode(encoding, errors="replace")
+    except (LookupError, UnicodeError):  # a codec that refuses even with errors="replace"
+        raise InputError(_bad_encoding(encoding, shown, 1)) from None
 
 
 _POSITION_SUFFIX = re.compile(r", line \d+, column \d+$")
@@ -239,7 +303,9 @@ def _exporter(roots: list[RawElement], xml_root: etree._Element) -> str:
         for annotation in root.kids("eAnnotations"):
             if annotation.attrs.get("source") == "Objing":
                 return "modelio"
-    version = next((v for k, v in xml_root.attrib.items() if str(k).endswith("}version")), "")
+    # keys first: reading every value of an element is quadratic in lxml (see MAX_ATTRIBUTES)
+    key = next((k for k in xml_root.attrib if str(k).endswith("}version")), None)
+    version = str(xml_root.get(key, "")) if key is not None else ""
     return "uml2-5/papyrus" if version == "20131001" else "uml"
 
 
@@ -282,7 +348,7 @@ def _make_element(
     qname = etree.QName(node)
     attrs: dict[str, str] = {}
     xmi_type = xmi_id = ""
-    for key, value in node.attrib.items():
+    for key, value in _attributes(node, ctx, line):
         aq = etree.QName(key)
         if aq.namespace is None:
             attrs[aq.localname] = str(value)
@@ -304,6 +370,23 @@ def _make_element(
     if xmi_id:
         _register(element, ctx)
     return element
+
+
+def _attributes(node: etree._Element, ctx: _Context, line: int) -> list[tuple[str, str]]:
+    """The element's attributes, refused past MAX_ATTRIBUTES before any value is read (counting
+    them is linear, reading them is not)."""
+    count = len(node.attrib)
+    if count > MAX_ATTRIBUTES:
+        raise InputError(
+            dg.diag(
+                dg.TOO_LARGE,
+                f"element <{_quoted(etree.QName(node).localname)[1:-1]}> has {count} attributes; "
+                f"the limit is {MAX_ATTRIBUTES} per element",
+                Span(file=ctx.file, line=line, col=_column(node, line, ctx)),
+                hint="XMI exports use a few attributes per element; this file was not exported",
+            )
+        )
+    return [(str(k), str(v)) for k, v in node.attrib.items()]
 
 
 def _infer_type(feature: str, xmi_type: str, uri: str, attrs: dict[str, str]) -> str:
@@ -363,9 +446,9 @@ def _is_reference(node: etree._Element) -> bool:
 
 
 def _ref_of(node: etree._Element) -> str:
-    for key, value in node.attrib.items():
+    for key in node.attrib:  # keys, then one value: linear however many attributes
         if etree.QName(key).localname in {"idref", "href"}:
-            return str(value)
+            return str(node.get(key, ""))
     return ""
 
 
@@ -375,7 +458,7 @@ def _stereotype(node: etree._Element, ctx: _Context) -> StereotypeApplication:
     bases: list[str] = []
     tags: dict[str, str] = {}
     xmi_id = None
-    for key, value in node.attrib.items():
+    for key, value in _attributes(node, ctx, line):
         aq = etree.QName(key)
         if aq.namespace and _is_xmi_uri(aq.namespace):
             xmi_id = str(value) if aq.localname == "id" else xmi_id

@@ -6,15 +6,21 @@ reported here, with the element's span; semantic rules live in `swarmgen.check`.
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Literal, TypeVar
+from typing import Literal
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend.raw import RawElement, RawModel, StereotypeApplication
-from swarmgen.ir import expr
+from swarmgen.ir import acyclic, expr
+from swarmgen.ir.literals import (
+    INTEGER_TEXT,
+    BadLiteral,
+    literal_text,
+    literal_value,
+    unrepresentable,
+)
 from swarmgen.ir.nodes import (
     DEFAULT_OUTCOMES,
     Behaviour,
@@ -61,12 +67,9 @@ KNOWN_STEREOTYPES: dict[str, frozenset[str]] = {
     "SwarmEvent": frozenset({"sender", "scope"}),
     **{k: _BEHAVIOUR_TAGS for k in _BEHAVIOURS},
 }
-MAX_SAFE_INTEGER = 2**53 - 1
 # Languages whose bodies are swarmgen's expression language; anything else is kept opaque.
 OWN_LANGUAGES = frozenset({"", "swarmgen", "sg"})
 _EVENT_TYPES = {"SignalEvent", "TimeEvent", "CallEvent", "ChangeEvent", "AnyReceiveEvent", "Signal"}
-
-T = TypeVar("T")
 
 
 @dataclass
@@ -91,9 +94,23 @@ class _Builder:
     def ref(
         self, element: RawElement, feature: str, kinds: set[str] | None = None
     ) -> RawElement | None:
-        """Resolve a single-valued reference, reporting dangling and wrong-kind references."""
+        """Resolve a single-valued reference, reporting dangling and wrong-kind references,
+        and several values where UML allows one (`source="_a _b"` used to take `_a`)."""
         values = element.ref_values(feature)
+        if len(values) > 1:
+            self.several(element, feature, values)
+            return None
         return self._resolve(element, feature, values[0], kinds) if values else None
+
+    def several(self, element: RawElement, feature: str, values: list[str]) -> None:
+        shown = " ".join(values[:3]) + (" ..." if len(values) > 3 else "")
+        self.report(
+            dg.SEVERAL_REFS,
+            f"{element.uml_type or element.feature} {_label(element)}: {feature} names "
+            f"{len(values)} elements ({shown}); it takes exactly one",
+            element.span,
+            hint=f"keep one id in {feature}",
+        )
 
     def refs(
         self, element: RawElement, feature: str, kinds: set[str] | None = None
@@ -127,7 +144,11 @@ class _Builder:
         return target
 
     def type_name(self, element: RawElement) -> str | None:
-        for value in element.ref_values("type"):
+        values = element.ref_values("type")
+        if len(values) > 1:
+            self.several(element, "type", values)
+            return None
+        for value in values:
             target = self.raw.resolve(value)
             if target is not None:
                 return target.name or None
@@ -138,27 +159,33 @@ class _Builder:
         return None
 
     def prop(self, element: RawElement) -> Property:
+        type_name = self.type_name(element)
         return Property(
             id=element.id or element.span.path,
             name=element.name,
             ident=identifier(element.name),
-            type=self.type_name(element),
-            default=self._representable(element, _default_value(element)),
+            type=type_name,
+            default=self._default(element, type_name),
             span=element.span,
         )
 
-    def _representable(self, element: RawElement, value: Value) -> Value:
-        """Numbers every target holds exactly: ECMAScript has no integers beyond 2**53."""
-        bad = (
-            isinstance(value, int) and not isinstance(value, bool) and abs(value) > MAX_SAFE_INTEGER
-        ) or (isinstance(value, float) and not math.isfinite(value))
-        if not bad:
-            return value
+    def _default(self, element: RawElement, type_name: str | None) -> Value:
+        """The default, if generated code can hold it exactly and it is of the declared type
+        (an Integer `abc` or `1e3` used to become a string literal, a Boolean `yes` false)."""
+        spec = element.first("defaultValue")
+        if spec is None:
+            return None
+        value = literal_value(spec)
+        if not isinstance(value, BadLiteral):
+            bad = unrepresentable(value, type_name)
+            if bad is None:
+                return value
+            value = bad
         self.report(
             dg.BAD_DEFAULT,
-            f"default value {value!r} of '{element.name}' cannot be represented exactly in the generated code",
+            f"default value {_short(literal_text(spec))} of '{element.name}' {value.problem}",
             element.span,
-            hint=f"use a number between -{MAX_SAFE_INTEGER} and {MAX_SAFE_INTEGER}",
+            hint=value.hint,
         )
         return None
 
@@ -201,46 +228,17 @@ class _Builder:
         return value
 
 
+def _label(element: RawElement) -> str:
+    """How a message names an element: by name, else (transitions rarely have one) by id."""
+    return f"'{element.name}'" if element.name else (element.id or element.span.path)
+
+
 def _is_external(value: str) -> bool:
     """hrefs into other files (profiles, UML libraries) are not ours to resolve."""
     if "#" not in value:
         return False
     file_part = value.split("#", 1)[0]
     return bool(file_part)
-
-
-def _default_value(element: RawElement) -> Value:
-    default = element.first("defaultValue")
-    if default is None:
-        return None
-    return literal_value(default)
-
-
-def literal_value(spec: RawElement) -> Value:
-    """The value of a UML ValueSpecification (EMF omits defaults: a bare LiteralInteger is 0)."""
-    raw = spec.attrs.get("value")
-    kind = spec.uml_type
-    if kind == "LiteralNull":
-        return None
-    if kind == "LiteralBoolean":
-        return (raw or "false").strip().lower() == "true"
-    if kind in {"LiteralInteger", "LiteralUnlimitedNatural"}:
-        return _number(raw or "0", int)
-    if kind == "LiteralReal":
-        return _number(raw or "0", float)
-    if kind == "Expression" and "symbol" in spec.attrs:  # how Modelio writes reals and the rest
-        text = spec.attrs["symbol"]
-        return _number(text, int) if text.strip().lstrip("-").isdigit() else _number(text, float)
-    if kind == "OpaqueExpression":
-        return "\n".join(b.text for b in spec.kids("body"))
-    return raw if raw is not None else spec.name if kind != "LiteralString" else ""
-
-
-def _number(text: str, kind: Callable[[str], T]) -> T | str:
-    try:
-        return kind(text.strip())
-    except ValueError:
-        return text
 
 
 def build(raw: RawModel) -> tuple[Model, list[Diagnostic]]:
@@ -250,6 +248,8 @@ def build(raw: RawModel) -> tuple[Model, list[Diagnostic]]:
     elements = list(raw.elements())
     classes = [e for e in elements if e.uml_type in {"Class", "Component"}]
     ancestry = _ancestry(b, classes)
+    hardware_classes = {e.id for e in classes if e.id and b.stereotype(e, _HARDWARE)}
+    b.diags += acyclic.class_cycles(raw, elements, hardware_classes)
     datatypes = tuple(_datatype(b, e) for e in elements if e.uml_type == "DataType")
     hardware = tuple(h for e in classes if (h := _hardware(b, e, ancestry)) is not None)
     hardware_ids = {h.id for h in hardware}
@@ -360,11 +360,12 @@ def _count(b: _Builder, attribute: RawElement) -> int:
     if upper is None:
         return 1
     text = upper.attrs.get("value", "1").strip()
-    if text.isdigit():
+    # ASCII digits only: str.isdigit() also takes `²`, which int() refuses (an internal error)
+    if INTEGER_TEXT.fullmatch(text) and text[0] not in "+-" and len(text) <= 18:
         return int(text)
     b.report(
         dg.BAD_MULTIPLICITY,
-        f"part '{attribute.name}' has multiplicity '{text}'; a swarm needs a fixed count",
+        f"part '{attribute.name}' has multiplicity {_short(text)}; a swarm needs a fixed count",
         attribute.span,
         hint="set the upper multiplicity to the number of members, e.g. 4",
     )
@@ -444,6 +445,8 @@ def _behaviour(b: _Builder, element: RawElement) -> Behaviour | None:
     outputs = [p for p in params if p.attrs.get("direction", "in") in {"out", "inout", "return"}]
     extra = app.tags.get("outcomes", "").replace(",", " ").split()
     outcomes = tuple(dict.fromkeys((*DEFAULT_OUTCOMES, *extra)))
+    for outcome in outcomes:
+        _check_outcome_name(b, element, app, outcome)
     ros_kind = b.tag_choice(app, "rosKind", ("action", "service", "topic"))
     ros = None
     if ros_kind is not None:
@@ -465,6 +468,24 @@ def _behaviour(b: _Builder, element: RawElement) -> Behaviour | None:
         emits=tuple(dict.fromkeys(app.tags.get("emits", "").replace(",", " ").split())),
         ros=ros,
         span=element.span,
+    )
+
+
+def _check_outcome_name(
+    b: _Builder, element: RawElement, app: StereotypeApplication, outcome: str
+) -> None:
+    """An outcome travels by its own name (the behaviour returns `lost.far`) as a token of the
+    event `done.invoke.<state>.<outcome>`: SCXML matches event descriptors by dot-separated
+    prefix, so `lost.far` fired the `lost` transition. Only names that are their own
+    identifier are safe in every engine and in SMACH's outcome keys (docs/profile.md)."""
+    if identifier(outcome) == outcome:
+        return
+    b.report(
+        dg.BAD_OUTCOME_NAME,
+        f"outcome '{outcome}' of '{element.name}' is not a plain name: outcomes are matched as "
+        "SCXML event tokens, where '.' separates tokens and '*' matches any",
+        app.span,
+        hint=f"rename it to '{identifier(outcome)}' (letters, digits and '_', not a reserved word)",
     )
 
 
@@ -517,8 +538,8 @@ class _MachineContext:
 
 def _machine(b: _Builder, element: RawElement) -> Machine:
     ctx = _MachineContext()
-    regions = tuple(_region(b, r, ctx) for r in element.kids("region"))
-    points = tuple(_pseudostate(p, ctx) for p in element.kids("connectionPoint"))
+    regions = _regions(b, element, ctx)
+    points = _connection_points(b, element, ctx)
     owner = element.parent if element.feature == "ownedBehavior" else None
     attributes = list(owner.kids("ownedAttribute")) if owner is not None else []
     data = tuple(b.prop(a) for a in attributes if not _is_part(a))
@@ -536,8 +557,51 @@ def _machine(b: _Builder, element: RawElement) -> Machine:
     )
 
 
+def _misplaced(b: _Builder, element: RawElement, what: str, hint: str) -> None:
+    b.report(
+        dg.UNEXPECTED_ELEMENT,
+        f"{element.feature} {_label(element)} is a {element.uml_type or 'element of unknown type'}, "
+        f"but {what}",
+        element.span,
+        hint=hint,
+    )
+
+
+def _regions(b: _Builder, owner: RawElement, ctx: _MachineContext) -> tuple[Region, ...]:
+    for region in owner.kids("region"):
+        if region.uml_type != "Region":
+            _misplaced(b, region, "only a Region may stand there", "make it a uml:Region")
+    return tuple(_region(b, r, ctx) for r in owner.kids("region"))
+
+
+def _connection_points(
+    b: _Builder, owner: RawElement, ctx: _MachineContext
+) -> tuple[Pseudostate, ...]:
+    points = []
+    for point in owner.kids("connectionPoint"):
+        if point.uml_type != "Pseudostate" or point.attrs.get("kind") not in _POINT_KINDS:
+            _misplaced(
+                b,
+                point,
+                "connection points are entryPoint and exitPoint pseudostates",
+                "move it into a region, or make it an entry or exit point",
+            )
+            continue
+        points.append(_pseudostate(b, point, ctx))
+    return tuple(points)
+
+
+_POINT_KINDS = {PseudoKind.ENTRY_POINT.value, PseudoKind.EXIT_POINT.value}
+_VERTEX_TYPES = {"State", "FinalState", "Pseudostate"}
+
+
 def _region(b: _Builder, element: RawElement, ctx: _MachineContext) -> Region:
-    ctx.transitions.extend(element.kids("transition"))
+    for transition in element.kids("transition"):
+        if transition.uml_type != "Transition":
+            _misplaced(
+                b, transition, "only a Transition may stand there", "make it a uml:Transition"
+            )
+        ctx.transitions.append(transition)
     vertices: list[Vertex] = []
     for sub in element.kids("subvertex"):
         vertex = _vertex(b, sub, ctx)
@@ -552,31 +616,63 @@ def _region(b: _Builder, element: RawElement, ctx: _MachineContext) -> Region:
 
 
 def _vertex(b: _Builder, element: RawElement, ctx: _MachineContext) -> Vertex | None:
+    """A region's subvertex. Anything else standing there (a `uml:StateMachine`, a
+    ConnectionPointReference) is an error: dropping it, as swarmgen once did with a warning,
+    left transitions and initial pseudostates pointing at nothing."""
+    if element.uml_type not in _VERTEX_TYPES:
+        _misplaced(
+            b,
+            element,
+            "a region holds states, final states and pseudostates",
+            "a state machine used inside another is a submachine state: a uml:State with "
+            'submachine="<machine id>"',
+        )
+        return None
+    if element.uml_type == "Pseudostate" and element.attrs.get("kind") in _POINT_KINDS:
+        _misplaced(
+            b,
+            element,
+            f"an {element.attrs['kind']} belongs to the connectionPoint list of a state or machine",
+            "make it a connectionPoint of the state or machine it enters or leaves",
+        )
+        return None
     if element.id:
         ctx.vertices[element.id] = element
     if element.uml_type == "FinalState":
+        _final_content(b, element)
         return FinalState(id=element.id or element.span.path, name=element.name, span=element.span)
     if element.uml_type == "Pseudostate":
-        return _pseudostate(element, ctx)
-    if element.uml_type != "State":
-        b.report(
-            dg.UNSUPPORTED,
-            f"a {element.uml_type or 'vertex of unknown type'} '{element.name}' is not a state; ignored",
-            element.span,
-        )
-        return None
+        return _pseudostate(b, element, ctx)
     return _state(b, element, ctx)
 
 
-def _pseudostate(element: RawElement, ctx: _MachineContext) -> Pseudostate:
+def _final_content(b: _Builder, element: RawElement) -> None:
+    """UML: a final state has no regions, no entry, exit or do behaviour, no submachine; the
+    emitters would drop them without a word."""
+    content = [f for f in ("region", "entry", "exit", "doActivity") if element.first(f) is not None]
+    content += ["submachine"] if element.ref_values("submachine") else []
+    if content:
+        b.report(
+            dg.BAD_FINAL_STATE,
+            f"final state '{element.name}' has {', '.join(content)}; a final state has none",
+            element.span,
+            hint="make it an ordinary state followed by a final state",
+        )
+
+
+def _pseudostate(b: _Builder, element: RawElement, ctx: _MachineContext) -> Pseudostate:
     if element.id:
         ctx.vertices[element.id] = element
     kind_text = element.attrs.get("kind", "initial")
-    kind = (
-        PseudoKind(kind_text)
-        if kind_text in PseudoKind.__members__.values()
-        else PseudoKind.INITIAL
-    )
+    known = kind_text in PseudoKind.__members__.values()
+    if not known:
+        b.report(
+            dg.UNKNOWN_KIND,
+            f"pseudostate '{element.name}' has kind '{kind_text}', which UML does not define",
+            element.span,
+            hint=f"use one of: {', '.join(k.value for k in PseudoKind)}",
+        )
+    kind = PseudoKind(kind_text) if known else PseudoKind.INITIAL
     return Pseudostate(
         id=element.id or element.span.path, name=element.name, kind=kind, span=element.span
     )
@@ -603,9 +699,9 @@ def _state(b: _Builder, element: RawElement, ctx: _MachineContext) -> State:
     return State(
         id=element.id or element.span.path,
         name=element.name,
-        regions=tuple(_region(b, r, ctx) for r in element.kids("region")),
+        regions=_regions(b, element, ctx),
         submachine=submachine.id if submachine is not None else None,
-        connection_points=tuple(_pseudostate(p, ctx) for p in element.kids("connectionPoint")),
+        connection_points=_connection_points(b, element, ctx),
         connections=tuple(connections),
         activity=_activity(b, element.first("doActivity"), opaque),
         entry=entry,
@@ -748,13 +844,28 @@ def _transition(b: _Builder, element: RawElement, ctx: _MachineContext) -> Trans
         guard_text=guard_text,
         effect=_actions_of(b, element.first("effect"), "effect", opaque),
         opaque=tuple(opaque),
-        kind=_transition_kind(element.attrs.get("kind", "external")),
+        kind=_transition_kind(b, element),
         span=element.span,
     )
 
 
-def _transition_kind(text: str) -> str:
-    return text if text in {"external", "internal", "local"} else "external"
+_TRANSITION_KINDS: dict[str, Literal["external", "internal", "local"]] = {
+    "external": "external",
+    "internal": "internal",
+    "local": "local",
+}
+
+
+def _transition_kind(b: _Builder, element: RawElement) -> Literal["external", "internal", "local"]:
+    text = element.attrs.get("kind", "external")
+    if text not in _TRANSITION_KINDS:
+        b.report(
+            dg.UNKNOWN_KIND,
+            f"transition {_label(element)} has kind '{text}', which UML does not define",
+            element.span,
+            hint="use external, local or internal",
+        )
+    return _TRANSITION_KINDS.get(text, "external")
 
 
 def _source_behaviour(b: _Builder, source: RawElement) -> Behaviour | None:

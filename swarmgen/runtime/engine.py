@@ -19,17 +19,19 @@ from typing import Any, Protocol
 from swarmgen.runtime.chart import (
     FINALIZE_PREFIX,
     OUTCOME_PREFIX,
+    STEP_BOUND,
     Call,
     Chart,
     Context,
     Node,
     Record,
+    StepBoundExceeded,
     Transition,
     fill,
     record,
 )
 
-__all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "Engine", "Event", "Host", "NullHost"]
+__all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
 
 
 @dataclass(slots=True)
@@ -42,7 +44,9 @@ class Event:
     timestamp: float = 0.0
     sender: str = ""
     origin: tuple[str, int] | None = None  # (state id, activation) of a behaviour's outcome
-    kind: str = "external"  # "external", "internal" or "platform"
+    # "external", "internal", "platform", or "raised": external, queued by this member's own
+    # `raise e(f = ...)` (the step bound goes on counting through it)
+    kind: str = "external"
 
 
 class Host(Protocol):
@@ -104,6 +108,12 @@ class Engine:
         self._active_ids: frozenset[str] | None = None
         self._atomic: list[Node] | None = None  # atomic states of the configuration, in order
         self.error_count = 0  # error.execution events raised so far (traces report them)
+        # The step bound (docs/semantics.md): bounded transitions taken since the count last
+        # restarted, whether that count's error was raised, and the input that restarted it.
+        self._steps = 0
+        self._bound_hit = False
+        self._input: Event | None = None
+        self._bounded = any(t.bounded for n in self.chart.nodes.values() for t in n.transitions)
 
     # --- public
 
@@ -151,6 +161,11 @@ class Engine:
         node = self.chart.nodes.get(node_id)
         return self._activation.get(node, 0) if node is not None else 0
 
+    @property
+    def bounded_steps(self) -> int:
+        """The step bound's count: bounded transitions taken (or refused) since it restarted."""
+        return self._steps
+
     def is_active(self, node_id: str) -> bool:
         if self._active_ids is None:
             self._active_ids = frozenset(n.id for n in self.config)
@@ -165,7 +180,7 @@ class Engine:
         if data is None:
             self.internal.append(self.make_event(name, None, self.member_id, kind="internal"))
         else:
-            self.host.deliver(self.make_event(name, data, self.member_id))
+            self.host.deliver(self.make_event(name, data, self.member_id, kind="raised"))
 
     def send_swarm(self, name: str, data: Mapping[str, Any] | None) -> None:
         self.host.send_swarm(self.make_event(name, data, self.member_id))
@@ -229,13 +244,36 @@ class Engine:
         return self._remove_conflicts(enabled) if len(enabled) > 1 else enabled
 
     def _first_enabled(self, owner: Node, candidates: tuple[Transition, ...]) -> Transition | None:
+        if self._bounded and self.ctx.event is not self._input:
+            self._restart_count(self.ctx.event)
         for transition in candidates:
             if (
                 transition.cond is None
                 or self._guarded(transition.cond, f"guard in {owner.id}") is True
-            ):
+            ) and (not transition.bounded or self._step_allowed(owner)):
                 return transition
         return None
+
+    def _restart_count(self, event: Event | None) -> None:
+        """The step bound's count restarts when the first transition is considered under a new
+        input from outside (not an event the member raised itself), as `$sg.tick(_event)` at
+        the head of every cond of the SCXML document restarts it in Qt SCXML."""
+        if event is not None and event.kind == "external":
+            self._input = event
+            self._steps, self._bound_hit = 0, False
+
+    def _step_allowed(self, owner: Node) -> bool:
+        """The step bound, checked after the guard held (as `$sg.spin()` ends the SCXML cond):
+        the STEP_BOUND+1st bounded transition of the macrostep raises error.execution and is not
+        taken; later ones are silently disabled until the next external event."""
+        self._steps += 1
+        if self._steps <= STEP_BOUND:
+            return True
+        if not self._bound_hit:
+            self._bound_hit = True
+            message = f"more than {STEP_BOUND} steps without an external event"
+            self._error(f"step bound in {owner.id}", StepBoundExceeded(message))
+        return False
 
     def _remove_conflicts(self, enabled: list[Transition]) -> list[Transition]:
         filtered: list[Transition] = []

@@ -94,9 +94,11 @@ class Transition:
     `to`: one target or several (a fork; none: a targetless transition that only runs `action`);
     `guard(ctx) -> bool` and `action(ctx)` see the member data as `ctx.data`; `internal=True` is
     SCXML's type="internal" (the source is not exited). Transitions of a state are tried in order.
+    `bounded=True`: the transition lies on a potential microstep cycle and counts towards the
+    step bound (docs/semantics.md; swarmgen decides it when it compiles a model).
     """
 
-    __slots__ = ("action", "guard", "internal", "on", "to")
+    __slots__ = ("action", "bounded", "guard", "internal", "on", "to")
 
     def __init__(
         self,
@@ -106,6 +108,7 @@ class Transition:
         guard: Cond | None = None,
         action: Action | None = None,
         internal: bool = False,
+        bounded: bool = False,
     ) -> None:
         self.on: tuple[Key, ...] = (on,) if isinstance(on, str | Event) else tuple(on)
         self.to: tuple[str, ...] = () if to is None else (to,) if isinstance(to, str) else tuple(to)
@@ -118,6 +121,7 @@ class Transition:
         self.guard = guard
         self.action = action
         self.internal = internal
+        self.bounded = bounded
 
     def __repr__(self) -> str:
         return f"Transition(on={self.on!r}, to={self.to!r})"
@@ -716,6 +720,7 @@ class _Compiler:
                 cond=transition.guard,
                 action=transition.action,
                 internal=transition.internal,
+                bounded=transition.bounded,
             )
 
     def _initial_targets(self, container: Container) -> tuple[str, ...]:

@@ -19,7 +19,7 @@ from swarmgen.chart.lower import lower
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.names import identifier
-from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX, zero_like
+from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX, STEP_BOUND, zero_like
 
 SCXML_NS = "http://www.w3.org/2005/07/scxml"
 SG_NS = "urn:swarmgen:scxml:1"
@@ -64,6 +64,39 @@ var $sg = {
   }
 };
 """
+# The step bound (docs/semantics.md), only in a document with bounded transitions (so others
+# keep their bytes). A bounded transition's cond ends with `$sg.spin()`: it counts, throws once
+# past the bound (Qt raises error.execution and the cond is false), then stays false until the
+# count restarts. Every cond of such a document starts with `$sg.tick(_event)`, which restarts
+# it at the first transition considered under a new input from outside, exactly where the
+# engine restarts it (`Engine._restart_count`); not under an event the document sent itself
+# (`<send target="#_internal">`, a `raise` with data: timers have a sendid, those have none).
+STEP_SCRIPT = f"""
+$sg.bound = {STEP_BOUND};
+$sg.steps = 0;
+$sg.hit = false;
+$sg.last = null;
+$sg.tick = function (e) {{
+  if (e !== undefined && e !== null && e.type === "external" && e !== $sg.last &&
+      !(e.origin === "#_internal" && !e.sendid)) {{
+    $sg.last = e;
+    $sg.steps = 0;
+    $sg.hit = false;
+  }}
+  return true;
+}};
+$sg.spin = function () {{
+  $sg.steps += 1;
+  if ($sg.steps <= $sg.bound) {{ return true; }}
+  if (!$sg.hit) {{
+    $sg.hit = true;
+    throw new RangeError("more than " + $sg.bound + " steps without an external event");
+  }}
+  return false;
+}};
+"""
+TICK = "$sg.tick(_event)"
+SPIN = "$sg.spin()"
 
 
 @dataclass(frozen=True)
@@ -90,9 +123,10 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
         scxml.set(_sg("member"), chart.member)
     if chart.initial:
         scxml.set("initial", " ".join(chart.initial))
-    writer = _Writer({d.name: d.id for d in chart.data}, {d.id: d for d in chart.data})
+    bounded = any(t.bounded for n in chart.walk() for t in n.transitions)
+    writer = _Writer({d.name: d.id for d in chart.data}, {d.id: d for d in chart.data}, bounded)
     writer.datamodel(scxml, chart.data)
-    _sub(scxml, "script").text = SUPPORT_SCRIPT
+    _sub(scxml, "script").text = SUPPORT_SCRIPT + (STEP_SCRIPT if bounded else "")
     for node in chart.children:
         writer.node(scxml, node)
     _metadata(scxml, chart)
@@ -157,6 +191,7 @@ def _literal_text(value: Value) -> str:
 class _Writer:
     data_ids: dict[str, str]  # model name of member data -> data id
     data: dict[str, c.DataItem]  # data id -> item
+    step_bound: bool = False  # the document has bounded transitions (STEP_SCRIPT)
 
     def js(self, e: expr.Expr | c.FieldDefault) -> str:
         if isinstance(e, c.FieldDefault):
@@ -190,7 +225,7 @@ class _Writer:
                 element.set(_sg(key), value)
         if node.kind == "history":
             if node.initial is not None:
-                self.transition(element, node.initial)
+                self.transition(element, node.initial, selected=False)
             return
         self.onentry(element, node)
         self.onexit(element, node)
@@ -199,7 +234,7 @@ class _Writer:
         for transition in node.transitions:
             self.transition(element, transition)
         if node.initial is not None:
-            self.transition(_sub(element, "initial"), node.initial)
+            self.transition(_sub(element, "initial"), node.initial, selected=False)
         for child in node.children:
             self.node(element, child)
 
@@ -246,6 +281,8 @@ class _Writer:
         for outcome in (*call.outcomes, None):
             event = prefix if outcome is None else f"{prefix}.{outcome}"
             transition = _sub(element, "transition", {"event": event})
+            if self.step_bound:
+                transition.set("cond", TICK)
             transition.set(_sg("finalize"), call.behaviour)
             for location, value in writes:
                 _sub(transition, "assign", {"location": location, "expr": value})
@@ -262,13 +299,18 @@ class _Writer:
         for name, location in call.results:
             _sub(element, _sg("result"), {"name": name, "location": location})
 
-    def transition(self, parent: etree._Element, transition: c.Transition) -> None:
+    def transition(
+        self, parent: etree._Element, transition: c.Transition, *, selected: bool = True
+    ) -> None:
+        """`selected=False`: an initial or history default transition (no cond allowed)."""
         attrs: dict[str, str] = {}
         if transition.events:
             attrs["event"] = " ".join(transition.events)
         conds = [f"In('{s}')" for s in transition.in_states]
         if transition.cond is not None:
             conds.append(self.js(transition.cond))
+        if self.step_bound and selected:
+            conds = [TICK, *conds, *([SPIN] if transition.bounded else [])]
         if conds:
             attrs["cond"] = " && ".join(conds)
         if transition.targets:

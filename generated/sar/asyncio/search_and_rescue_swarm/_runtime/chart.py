@@ -68,6 +68,17 @@ def fill(value: Any, template: Any) -> Any:
 
 FINALIZE_PREFIX = "done.invoke."  # the host's word that a state's behaviour ended
 OUTCOME_PREFIX = "outcome."  # the outcome as the state's transitions see it
+# The step bound (docs/semantics.md): how many times the transitions that lie on a potential
+# microstep cycle (`bounded`, decided by lowering) may be taken in one macrostep. The next one
+# raises error.execution and is not taken, and they stay disabled until the next external event:
+# a livelock ends its macrostep instead of spinning forever. The one place this number is
+# defined; the SCXML support script and every Python backend read it from here.
+STEP_BOUND = 1000
+
+
+class StepBoundExceeded(RuntimeError):
+    """The error.execution of the step bound: a macrostep took bounded transitions more than
+    STEP_BOUND times."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -140,6 +151,7 @@ class Transition:
     action: Action | None = None
     internal: bool = False
     order: int = 0
+    bounded: bool = False  # on a potential microstep cycle: counted by the step bound
 
     def matches(self, name: str) -> bool:
         """SCXML event descriptors: `a.b` matches `a.b` and `a.b.c`; `*` matches anything."""
@@ -254,8 +266,9 @@ class ChartBuilder:
         cond: Cond | None = None,
         action: Action | None = None,
         internal: bool = False,
+        bounded: bool = False,
     ) -> None:
-        options = {"cond": cond, "action": action, "internal": internal}
+        options = {"cond": cond, "action": action, "internal": internal, "bounded": bounded}
         self._pending.append((source, tuple(events), tuple(targets), options))
 
     def initial(
