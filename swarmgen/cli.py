@@ -58,7 +58,7 @@ def _debug() -> bool:
 
 def _fail(message: str) -> NoReturn:
     """A user error: one line on stderr, exit 2."""
-    click.echo(f"swarmgen: error: {' '.join(message.splitlines())}", err=True)
+    click.echo(f"swarmgen: error: {dg.one_line(' '.join(message.splitlines()))}", err=True)
     sys.exit(dg.ExitCode.INPUT_ERROR)
 
 
@@ -186,27 +186,34 @@ def compile_(
     _emit_diagnostics(diagnostics, fmt, to_stdout=False)
     if dg.has_errors(diagnostics) and result.files:
         click.echo(
-            f"swarmgen: {model}: {dg.summary_line(diagnostics)} (--strict); nothing written",
+            f"swarmgen: {console.shown(model)}: {dg.summary_line(diagnostics)} (--strict); "
+            "nothing written",
             err=True,
         )
         sys.exit(dg.ExitCode.MODEL_ERRORS)
     if not result.files:
-        click.echo(f"swarmgen: {model}: {dg.summary_line(diagnostics)}; nothing written", err=True)
+        click.echo(
+            f"swarmgen: {console.shown(model)}: {dg.summary_line(diagnostics)}; nothing written",
+            err=True,
+        )
         sys.exit(result.validation.exit_code or dg.ExitCode.MODEL_ERRORS)
     if check:
         difference = pipeline.diff_tree(result.files, output)
         if difference:
             click.echo(difference, nl=False)
             click.echo(
-                f"swarmgen: {output} is stale; run: swarmgen compile {model} -o {output}", err=True
+                f"swarmgen: {console.shown(output)} is stale; run: swarmgen compile "
+                f"{console.shown(model)} -o {console.shown(output)}",
+                err=True,
             )
             sys.exit(dg.ExitCode.MODEL_ERRORS)
-        click.echo(f"swarmgen: {output} is up to date", err=True)
+        click.echo(f"swarmgen: {console.shown(output)} is up to date", err=True)
         return
     pipeline.write_tree(result.files, output)
     count = sum(1 for p in result.files if p.suffix == ".scxml")
     click.echo(
-        f"swarmgen: {model} -> {output}: {count} SCXML document(s); {dg.summary_line(diagnostics)}",
+        f"swarmgen: {console.shown(model)} -> {console.shown(output)}: {count} SCXML document(s); "
+        f"{dg.summary_line(diagnostics)}",
         err=True,
     )
 
@@ -334,7 +341,10 @@ def graph_(model: Path, member: str | None, diagram_format: str, output: Path | 
     diagnostics = result.validation.diagnostics
     if not result.files:
         _emit_diagnostics(diagnostics, "text", to_stdout=False)
-        click.echo(f"swarmgen: {model}: {dg.summary_line(diagnostics)}; nothing drawn", err=True)
+        click.echo(
+            f"swarmgen: {console.shown(model)}: {dg.summary_line(diagnostics)}; nothing drawn",
+            err=True,
+        )
         sys.exit(result.validation.exit_code or dg.ExitCode.MODEL_ERRORS)
     diagrams = {p: t for p, t in result.files.items() if p.name != pipeline.MANIFEST}
     if output is None:
@@ -342,7 +352,9 @@ def graph_(model: Path, member: str | None, diagram_format: str, output: Path | 
         return
     pipeline.write_tree(result.files, output)
     click.echo(
-        f"swarmgen: {model} -> {output}: {len(diagrams)} {diagram_format} diagram(s)", err=True
+        f"swarmgen: {console.shown(model)} -> {console.shown(output)}: {len(diagrams)} "
+        f"{diagram_format} diagram(s)",
+        err=True,
     )
 
 
@@ -495,9 +507,9 @@ def simulate(
                 click.echo(f"\n# {name}\n{files[name].decode()}", nl=False)
     errors = sum(len(r.errors) for r in sim.runs)
     unfinished = sum(1 for r in sim.runs if r.reason in ("max_ticks", "stalled"))
-    where = f" -> {output}" if output is not None else ""
+    where = f" -> {console.shown(output)}" if output is not None else ""
     click.echo(
-        f"swarmgen: {model}{where}: {len(sim.runs)} runs of {len(sim.configs)} configuration(s) "
+        f"swarmgen: {console.shown(model)}{where}: {len(sim.runs)} runs of {len(sim.configs)} configuration(s) "
         f"in {time.perf_counter() - started:.1f} s; {unfinished} did not reach the stop "
         f"condition; {errors} behaviour error(s)",
         err=True,

@@ -334,18 +334,19 @@ def render_text(diagnostics: Sequence[Diagnostic], *, excerpt: bool = True) -> s
 
 
 def _render_one(d: Diagnostic, sources: dict[str, list[str] | None] | None) -> str:
-    lines = [f"{d.span.location()}: {d.level.value}: {_one_line(d.message)} [{d.code.id}]"]
+    where = one_line(d.span.location())  # a file name with a line break must not split it
+    lines = [f"{where}: {d.level.value}: {one_line(d.message)} [{d.code.id}]"]
     if d.span.path:
-        lines.append(f"  in: {_one_line(d.span.path)}")
+        lines.append(f"  in: {one_line(d.span.path)}")
     if sources is not None and d.span.line > 0:
         lines.extend(_excerpt(d.span, sources))
-    lines.extend(f"  note: {_one_line(n)}" for n in d.notes)
+    lines.extend(f"  note: {one_line(n)}" for n in d.notes)
     if d.hint:
-        lines.append(f"  hint: {_one_line(d.hint)}")
+        lines.append(f"  hint: {one_line(d.hint)}")
     return "\n".join(lines) + "\n"
 
 
-def _one_line(text: str) -> str:
+def one_line(text: str) -> str:
     """Model names with line breaks must not break the one-line-per-finding format."""
     if text.isprintable():
         return text
@@ -390,6 +391,22 @@ def render_json(diagnostics: Sequence[Diagnostic]) -> str:
         "summary": {"errors": errors, "warnings": warnings},
     }
     return json.dumps(payload, indent=2, ensure_ascii=False) + "\n"
+
+
+def refusal_line(model: object, diagnostics: Sequence[Diagnostic]) -> str:
+    """One line for a command that runs a model (simulate, replay) and cannot: the first error,
+    located, and how to see them all."""
+    model = one_line(str(model))
+    errors = [d for d in diagnostics if d.level is Severity.ERROR]
+    if not errors:
+        return f"{model}: the model has errors; run `swarmgen validate {model}`"
+    first = errors[0]
+    where = "".join(f":{n}" for n in (first.span.line, first.span.col) if n)
+    more = f" (and {len(errors) - 1} more error(s))" if len(errors) > 1 else ""
+    return (
+        f"{model}{where}: {one_line(first.message)} [{first.code.id}]{more}; "
+        f"run `swarmgen validate {model}`"
+    )
 
 
 def summary_line(diagnostics: Sequence[Diagnostic]) -> str:

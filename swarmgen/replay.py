@@ -120,7 +120,7 @@ def replay_many(
     """One trace per scenario; the model is compiled once and each scenario starts afresh."""
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
-        raise ReplayError(f"{model}: the model has errors; run `swarmgen validate {model}`")
+        raise ReplayError(dg.refusal_line(model, validation.diagnostics))
     charts = {c.member or c.name: c for c in lower(validation.model)}
     if member not in charts:
         raise ReplayError(f"no member type '{member}'; choose one of: {', '.join(sorted(charts))}")

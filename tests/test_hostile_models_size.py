@@ -487,7 +487,7 @@ def test_simulate_and_replay_refuse_special_models(kind: str, tmp_path: Path) ->
         ("replay", model, "--member", "UAV", "--script", script, "--backend", "asyncio"),
     ):
         outcome = swarmgen(*args, cwd=tmp_path, timeout=20)
-        assert_refused(outcome, exit=2)
+        assert_refused(outcome, exit=2, says="SG001")  # the diagnostic itself, not just "errors"
         assert outcome.seconds < LIMIT + 1
 
 

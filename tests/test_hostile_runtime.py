@@ -511,3 +511,42 @@ def test_ros_failing_server_aborts_the_goal(ros_built: Path, tmp_path: Path, cas
     assert members["bot_2"]["finished"] and members["bot_2"]["active"] == ["Failed"], summary
     assert says in json.dumps(summary), summary
     assert "Traceback" not in run.stderr, run.stderr[-3000:]
+
+
+def _echo_model() -> str:
+    """Every member answers every `ping` with a `ping` to the whole swarm (itself included): its
+    queue never empties, and no step bound applies (each ping is a message from the bus)."""
+    kit = ModelKit("Echo")
+    kit.event("go", sender="station")
+    kit.event("ping")
+    m = kit.machine("EchoMission")
+    m.initial("Idle")
+    m.state("Idle")
+    m.state("Chat")
+    m.transition("Idle", "Chat", "go", effect="send ping")
+    m.transition("Chat", "Chat", "ping", effect="send ping")
+    kit.member("Bot", machine=m)
+    kit.swarm("Swarm", {"Bot": 2})
+    return kit.xmi()
+
+
+def test_a_swarm_that_never_stops_talking_still_ends_at_its_duration(tmp_path: Path) -> None:
+    (tmp_path / "echo.xmi").write_text(_echo_model(), encoding="utf-8")
+    compiled = swarmgen("compile", "echo.xmi", "-o", "out", "--backend", "asyncio", cwd=tmp_path)
+    assert_clean(compiled, (0,))
+    parent = tmp_path / "out" / "asyncio"
+    environment = {**os.environ, "PYTHONPATH": str(parent)}
+    started = time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, "-m", "echo_swarm", "--swarm", "--events", "go@0", "--duration", "1"],
+        cwd=parent,
+        env=environment,
+        stdout=subprocess.DEVNULL,  # millions of trace lines: only the ending matters here
+        stderr=subprocess.PIPE,
+        timeout=30,
+        check=False,
+    )
+    seconds = time.perf_counter() - started
+    assert done.returncode == 0, done.stderr.decode()[-2000:]  # ended by --duration, not killed
+    assert seconds < 2.5 + 1.0, seconds  # the hard deadline would be duration + grace + 1 s
+    assert b"overran" not in done.stderr

@@ -20,6 +20,7 @@ from swarmgen.runtime.chart import Call, Chart, Node, record
 from swarmgen.runtime.engine import FINALIZE_PREFIX, Engine, Event
 
 CANCEL_GRACE = 1.0  # seconds a cancelled behaviour may take to end before it is abandoned
+DRAIN_BATCH = 256  # events processed between two yields to the event loop
 MAX_KEPT_ERRORS = 100  # per member: a behaviour failing in a retry loop must not fill memory
 # What a failing behaviour may raise: KeyboardInterrupt and SystemExit too, since raised by a
 # behaviour they would otherwise leave the event loop and end every member of the process.
@@ -163,11 +164,17 @@ class Member:
         try:
             while self.engine.running:
                 event = await self.queue.get()
+                drained = 0
                 while event is not None:  # drain what is queued without yielding per event
                     self.engine.send(event)
                     self._trace(event)
+                    drained += 1
                     if not self.engine.running or self.queue.empty():
                         break
+                    if drained % DRAIN_BATCH == 0:
+                        # a queue that never empties (a member that answers its own swarm
+                        # events) must not starve timers, behaviours and --duration
+                        await asyncio.sleep(0)
                     event = self.queue.get_nowait()
                 if event is None:
                     break

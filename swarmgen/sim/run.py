@@ -96,7 +96,7 @@ def compile_machines(model: Path) -> Machines:
 
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
-        raise SimulationError(f"{model}: the model has errors; run `swarmgen validate {model}`")
+        raise SimulationError(dg.refusal_line(model, validation.diagnostics))
     common = {"version": __version__, "source": model.name, "runtime": "swarmgen.runtime"}
     members = []
     for chart in lower(validation.model):
