@@ -35,8 +35,9 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from swarmgen.sim import run as sim  # noqa: E402
 from swarmgen.sim import scenario as sc  # noqa: E402
+from swarmgen.sim.machines import compile_machines  # noqa: E402
+from swarmgen.sim.sweep import simulate  # noqa: E402
 
 MODEL = ROOT / "sample_models" / "sar" / "sar.xmi"
 RESULTS = ROOT / "benchmarks" / "results" / "simulate.json"
@@ -59,11 +60,11 @@ def swarmgen_runs(workers: int, reps: int) -> tuple[float, float, float, dict[in
     """(compile seconds, simulate seconds, simulate CPU seconds, size -> mean ticks to each
     level)."""
     started = time.perf_counter()
-    machines = sim.compile_machines(MODEL)
+    machines = compile_machines(MODEL)
     compiled = time.perf_counter()
     cpu = cpu_seconds()
     scenario = sc.load("coverage").with_overrides({"UAV": list(SIZES)}, reps=reps)
-    result = sim.simulate(machines, scenario, workers=workers)
+    result = simulate(machines, scenario, workers=workers)
     finished = time.perf_counter()
     cpu = cpu_seconds() - cpu
     assert all(r.reason == "coverage" for r in result.runs)
@@ -169,10 +170,10 @@ def scale_run(uavs: int, side: int) -> dict[str, Any]:
     """In a fresh process: 1,000 UAVs on a 2001 x 2001 grid to 100 percent coverage."""
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     started = time.perf_counter()
-    machines = sim.compile_machines(MODEL)
+    machines = compile_machines(MODEL)
     scenario = sc.load("coverage").with_overrides({"UAV": [uavs]}, reps=1)
     scenario = sc.parse({**scenario.to_json(), "world": {"width": side, "height": side, "view": 1}})
-    result = sim.simulate(machines, scenario, workers=1)
+    result = simulate(machines, scenario, workers=1)
     elapsed = time.perf_counter() - started
     (run,) = result.runs
     status = Path("/proc/self/status")

@@ -6,6 +6,7 @@ misuse, 3 an internal error (a bug in swarmgen: please report it).
 
 from __future__ import annotations
 
+import difflib
 import json
 import os
 import sys
@@ -13,12 +14,16 @@ import traceback
 from collections.abc import Callable
 from functools import wraps
 from pathlib import Path
-from typing import TYPE_CHECKING, NoReturn, ParamSpec, TypeVar
+from typing import TYPE_CHECKING, Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
 from swarmgen import __version__, console, pipeline
 from swarmgen import diagnostics as dg
+from swarmgen.backends import SCXML
+from swarmgen.backends import names as backend_names
+from swarmgen.backends import runnable as runnable_outputs
+from swarmgen.errors import SwarmgenError
 
 if TYPE_CHECKING:
     from swarmgen.sim.scenario import Scenario
@@ -37,8 +42,8 @@ def _guarded(command: Callable[P, R]) -> Callable[P, R]:
             return command(*args, **kwargs)
         except (click.exceptions.Exit, click.ClickException, click.Abort):
             raise
-        except (pipeline.OutputError, console.StreamError, console.OutputPathError) as err:
-            _fail(str(err))
+        except SwarmgenError as err:  # every user error, mapped to its exit code here only
+            _fail(str(err), err.exit_code)
         except Exception as err:  # a bug: report it without a traceback wall
             click.echo(f"swarmgen: internal error: {type(err).__name__}: {err}", err=True)
             click.echo(
@@ -56,10 +61,10 @@ def _debug() -> bool:
     return os.environ.get("SWARMGEN_DEBUG", "") not in {"", "0"}
 
 
-def _fail(message: str) -> NoReturn:
-    """A user error: one line on stderr, exit 2."""
+def _fail(message: str, code: int = dg.ExitCode.INPUT_ERROR) -> NoReturn:
+    """A user error: one line on stderr, exit `code` (2 unless the error says otherwise)."""
     click.echo(f"swarmgen: error: {dg.one_line(' '.join(message.splitlines()))}", err=True)
-    sys.exit(dg.ExitCode.INPUT_ERROR)
+    sys.exit(code)
 
 
 class _PathType(click.Path):
@@ -77,6 +82,20 @@ class _PathType(click.Path):
 
 
 PATH = _PathType(path_type=Path)
+
+
+class _OutputChoice(click.Choice[str]):
+    """One of the registry's outputs (`swarmgen.backends`); a wrong name gets the close ones."""
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
+        """The name itself, or a usage error naming the choices and the closest of them."""
+        try:
+            return str(super().convert(value, param, ctx))
+        except click.BadParameter:
+            close = difflib.get_close_matches(str(value), list(self.choices), n=1)
+            also = f"; did you mean '{close[0]}'?" if close else ""
+            choices = ", ".join(map(str, self.choices))
+            self.fail(f"unknown backend '{value}'; choose from {choices}{also}", param, ctx)
 
 
 def _emit_diagnostics(diagnostics: list[dg.Diagnostic], fmt: str, *, to_stdout: bool) -> None:
@@ -153,8 +172,14 @@ def _check_codes(codes: tuple[str, ...]) -> None:
     "backends",
     multiple=True,
     metavar="NAME",
-    help="Only these outputs besides SCXML (repeatable: asyncio, smach, rclpy, diagrams; "
+    type=_OutputChoice(backend_names()),
+    help=f"Only these outputs besides SCXML (repeatable: {', '.join(backend_names(SCXML))}; "
     "`scxml` alone: SCXML only). Default: all.",
+)
+@click.option(
+    "--templates",
+    type=_PathType(path_type=Path, exists=True, file_okay=False),
+    help="A directory of Jinja2 templates used before the shipped ones (same relative paths).",
 )
 @FORMAT
 @STRICT
@@ -165,23 +190,14 @@ def compile_(
     output: Path,
     check: bool,
     backends: tuple[str, ...],
+    templates: Path | None,
     fmt: str,
     strict: bool,
     disabled: tuple[str, ...],
 ) -> None:
     """Compile MODEL into OUTPUT (SCXML and every backend), replacing it atomically."""
     _check_codes(disabled)
-    from swarmgen.backends import names as backend_names
-
-    known = ["scxml", *backend_names(), "diagrams"]
-    unknown = [b for b in backends if b not in known]
-    if unknown:
-        raise click.BadParameter(
-            f"unknown backend(s) {', '.join(unknown)}; choose from {', '.join(known)}",
-            param_hint="--backend",
-        )
-    selected = [b for b in backends if b != "scxml"] if backends else None
-    result = pipeline.compile_model(model, backends=selected)
+    result = pipeline.compile_model(model, backends=backends or None, templates=templates)
     diagnostics = dg.apply_options(result.validation.diagnostics, strict=strict, disabled=disabled)
     _emit_diagnostics(diagnostics, fmt, to_stdout=False)
     if dg.has_errors(diagnostics) and result.files:
@@ -261,7 +277,7 @@ def schema(output: Path, check: bool) -> None:
 @click.option("--member", required=True, help="Member type to run.")
 @click.option("--script", "scenario", type=PATH, required=True, help="Scenario (JSON).")
 @click.option(
-    "--backend", type=click.Choice(["asyncio", "smach", "scxml", "rclpy"]), default="asyncio", show_default=True,
+    "--backend", type=_OutputChoice(runnable_outputs()), default="asyncio", show_default=True,
     help="Where to run: the generated asyncio, smach or rclpy code, or the SCXML in Qt SCXML.",
 )  # fmt: skip
 @click.option(
@@ -279,11 +295,8 @@ def replay(
     if record is not None:  # checked before anything runs: on failure nothing is written
         console.check_new_directory(record, "--record")
         _require_trace("--record")
-    try:
-        _, steps = replaying.load_scenario(scenario)
-        trace = replaying.replay(model, member, steps, backend)
-    except replaying.ReplayError as err:
-        _fail(str(err))
+    _, steps = replaying.load_scenario(scenario)
+    trace = replaying.replay(model, member, steps, backend)
     for line in trace:
         click.echo(json.dumps(line, sort_keys=True))
     sys.stdout.flush()  # a full stdout is reported before the bag is written
@@ -295,12 +308,9 @@ def _record_replay(
     path: Path, member: str, steps: list[dict[str, object]], trace: list[dict[str, object]],
     storage: str,
 ) -> None:  # fmt: skip
-    from swarmgen.trace.bag import TraceError, record_replay
+    from swarmgen.trace.recorder import record_replay
 
-    try:
-        record_replay(path, member, steps, trace, storage=storage)
-    except TraceError as err:
-        _fail(str(err))
+    record_replay(path, member, steps, trace, storage=storage)
     shown = console.shown(path)
     click.echo(f"swarmgen: recorded {len(steps)} step(s) into {shown} ({storage})", err=True)
 
@@ -335,7 +345,7 @@ def graph_(model: Path, member: str | None, diagram_format: str, output: Path | 
         raise click.UsageError("--format svg writes files: give -o DIR")
     try:
         result = pipeline.graph_model(model, diagram_format, member)
-    except GraphError as err:
+    except GraphError as err:  # printed as it is, not escaped to one line like other errors
         click.echo(f"swarmgen: error: {err}", err=True)
         sys.exit(dg.ExitCode.INPUT_ERROR)
     diagnostics = result.validation.diagnostics
@@ -397,16 +407,17 @@ def timeline(
         raise click.BadParameter(f"{shown}: use a .png or .svg file", param_hint="--plot")
     _require_trace("timeline")
     from swarmgen.trace import timeline as timelines
-    from swarmgen.trace.bag import TraceError, read_events
+    from swarmgen.trace.bag import TraceError
+    from swarmgen.trace.reader import read_events
 
     made: list[Path] = []  # the output files' directories, checked (made) before reading
     for path, option in ((csv_path, "--csv"), (plot_path, "--plot")):
         made += console.check_file(path, option) if path is not None else []
     try:
         runs = read_events(bags, renames)
-    except TraceError as err:
+    except TraceError:
         console.remove_made(made)
-        _fail(str(err))
+        raise
     chosen = [e.strip() for e in events.split(",") if e.strip()] if events else None
     result = timelines.build(runs, chosen)
     picture = timelines.render(result, plot_path.suffix.lower()[1:]) if plot_path else b""
@@ -471,34 +482,29 @@ def simulate(
         _require_trace("--record")
 
     started = time.perf_counter()
-    try:
-        chosen = sim_scenario.load(scenario)
-        counts: dict[str, list[int]] = {}
-        for item in members:
-            counts.update(sim_scenario.parse_members(item))
-        target_counts = sim_scenario.parse_counts(targets, "--targets") if targets else None
-        chosen = chosen.with_overrides(counts, target_counts, reps, seed)
-        _check_sweep(model, chosen)
-        shown = [-1]
+    chosen = sim_scenario.load(scenario)
+    counts: dict[str, list[int]] = {}
+    for item in members:
+        counts.update(sim_scenario.parse_members(item))
+    target_counts = sim_scenario.parse_counts(targets, "--targets") if targets else None
+    chosen = chosen.with_overrides(counts, target_counts, reps, seed)
+    _check_sweep(model, chosen)
+    shown = [-1]
 
-        def progress(done: int, total: int) -> None:
-            width = 30
-            filled = width * done // max(1, total)
-            tenth = 10 * done // max(1, total)
-            if sys.stderr.isatty() or tenth != shown[0] or done == total:
-                shown[0] = tenth
-                end = "" if sys.stderr.isatty() and done < total else "\n"
-                sys.stderr.write(
-                    f"\rswarmgen: simulate [{'#' * filled}{'.' * (width - filled)}] "
-                    f"{done}/{total} runs {time.perf_counter() - started:.1f} s{end}"
-                )
-                sys.stderr.flush()
+    def progress(done: int, total: int) -> None:
+        width = 30
+        filled = width * done // max(1, total)
+        tenth = 10 * done // max(1, total)
+        if sys.stderr.isatty() or tenth != shown[0] or done == total:
+            shown[0] = tenth
+            end = "" if sys.stderr.isatty() and done < total else "\n"
+            sys.stderr.write(
+                f"\rswarmgen: simulate [{'#' * filled}{'.' * (width - filled)}] "
+                f"{done}/{total} runs {time.perf_counter() - started:.1f} s{end}"
+            )
+            sys.stderr.flush()
 
-        sim, files = sim_run.simulate_model(
-            model, chosen, output, workers, progress, record, storage
-        )
-    except (sim_scenario.ScenarioError, sim_run.SimulationError) as err:
-        _fail(str(err))
+    sim, files = sim_run.simulate_model(model, chosen, output, workers, progress, record, storage)
     coverage = files.get("coverage.csv", b"").decode()
     if output is None:
         click.echo(coverage, nl=False)

@@ -24,16 +24,18 @@ import tempfile
 import unicodedata
 from pathlib import Path
 
+from swarmgen.errors import SwarmgenError
+
 SHOWN_MAX = 160  # characters of a path in a message; longer ones are cut in the middle
 NAME_MAX = 255  # bytes of one path component (Linux, macOS)
 PATH_MAX = 4096  # bytes of a whole path (Linux)
 
 
-class StreamError(Exception):
+class StreamError(SwarmgenError):
     """stdout cannot be written (closed, full); the message says why, in one line."""
 
 
-class OutputPathError(Exception):
+class OutputPathError(SwarmgenError):
     """An output path the command cannot write; the message says why, in one line."""
 
 

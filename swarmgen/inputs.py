@@ -11,8 +11,10 @@ import os
 import stat
 from pathlib import Path
 
+from swarmgen.errors import SwarmgenError
 
-class InputRefused(Exception):
+
+class InputRefused(SwarmgenError):
     """The file cannot be read as an input; the message says why, in one line."""
 
 

@@ -20,13 +20,14 @@ from pathlib import Path
 from typing import Any
 
 from swarmgen.console import shown
+from swarmgen.errors import SwarmgenError
 from swarmgen.inputs import InputRefused, read_limited
 
 MAX_DEPTH = 64  # objects and lists inside each other; the shipped files use 3
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
-class JsonError(Exception):
+class JsonError(SwarmgenError):
     """A JSON side file that cannot be used; the message is one line (file: path: problem)."""
 
 

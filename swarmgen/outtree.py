@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
 from swarmgen import __version__
+from swarmgen.errors import SwarmgenError
 
 MANIFEST = ".swarmgen.json"
 FORMAT = 1
@@ -44,7 +45,7 @@ _DIGEST = re.compile(r"[0-9a-f]{64}")
 _SHOWN = 5  # files named in a refusal
 
 
-class OutputError(Exception):
+class OutputError(SwarmgenError):
     """The output directory cannot be written safely; the message says why and what to do."""
 
 

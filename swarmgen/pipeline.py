@@ -15,14 +15,17 @@ from pathlib import Path, PurePosixPath
 
 from swarmgen import __version__, check, graph, outtree
 from swarmgen import diagnostics as dg
-from swarmgen.backends import registry
+from swarmgen.backends import SCXML, ScxmlOutput, registry, selection
+from swarmgen.chart import checks as chart_checks
 from swarmgen.chart.lower import lower
+from swarmgen.chart.model import Chart
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend import load
+from swarmgen.generated import header, markdown_cell
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
-from swarmgen.render import render
-from swarmgen.scxml.emit import ScxmlDocument, serialize
+from swarmgen.render import render, templates_from
+from swarmgen.scxml.emit import ScxmlDocument
 
 MANIFEST = outtree.MANIFEST
 OutputError = outtree.OutputError
@@ -33,6 +36,7 @@ Files = dict[PurePosixPath, str]
 class Validation:
     model: Model | None
     diagnostics: list[Diagnostic]
+    charts: tuple[Chart, ...] = ()  # the lowered model; empty unless it passed the checks
 
     @property
     def exit_code(self) -> dg.ExitCode:
@@ -59,7 +63,8 @@ def _few_collections() -> Iterator[None]:
 
 
 def validate(path: Path) -> Validation:
-    """Load, build and check one model; stops after the first stage that reports errors."""
+    """Load, build, check, lower and check the charts of one model; stops after the first
+    stage that reports errors (so compile and validate report the same diagnostics)."""
     with _few_collections():
         return _validate(path)
 
@@ -70,14 +75,22 @@ def _validate(path: Path) -> Validation:
         return Validation(None, dg.normalise(found))
     model, built = build(raw)
     found += built
-    if not dg.has_errors(found):
-        found += check.run(model)
-    return Validation(model, dg.normalise(found))
+    if dg.has_errors(found):
+        return Validation(model, dg.normalise(found))
+    found += check.run(model)
+    if not check.may_lower(found):
+        return Validation(model, dg.normalise(found))
+    charts = lower(model)
+    found += chart_checks.run(model, charts)
+    return Validation(model, dg.normalise(found), charts)
 
 
-def compile_model(path: Path, backends: Sequence[str] | None = None) -> Compilation:
-    """Validate, then render SCXML and the backends (all, or those named)."""
-    with _few_collections():
+def compile_model(
+    path: Path, backends: Sequence[str] | None = None, templates: Path | None = None
+) -> Compilation:
+    """Validate, then render every output of the registry (all, or SCXML and those named),
+    with the templates of `templates` before the shipped ones (`swarmgen.render`)."""
+    with _few_collections(), templates_from(templates):
         return _compile(path, backends)
 
 
@@ -86,18 +99,13 @@ def _compile(path: Path, backends: Sequence[str] | None) -> Compilation:
     if validation.model is None or dg.has_errors(validation.diagnostics):
         return Compilation(validation, {})
     files: Files = {}
-    charts = lower(validation.model)
-    documents = tuple(serialize(chart) for chart in charts)
-    for document in documents:
-        files[PurePosixPath("scxml", f"{document.name}.scxml")] = document.text
-    for name, backend in registry().items():
-        if backends is None or name in backends:
-            for relative, text in backend.render(validation.model, charts).items():
-                files[PurePosixPath(name) / relative] = text
-    if backends is None or "diagrams" in backends:
-        for relative, text in graph.files(validation.model, "mermaid").items():
-            files[PurePosixPath("diagrams") / relative] = text
-    files[PurePosixPath("README.md")] = _output_readme(validation.model, path, documents)
+    outputs = registry()
+    for name in selection(backends):
+        for relative, text in outputs[name].render(validation.model, validation.charts).items():
+            files[PurePosixPath(name) / relative] = text
+    scxml = outputs[SCXML]
+    assert isinstance(scxml, ScxmlOutput)  # always rendered: the README lists its documents
+    files[PurePosixPath("README.md")] = _output_readme(validation.model, path, scxml.documents)
     files[PurePosixPath(MANIFEST)] = _manifest("compile", path, files)
     return Compilation(validation, files)
 
@@ -115,24 +123,19 @@ def graph_model(path: Path, fmt: str = "mermaid", member: str | None = None) -> 
         return Compilation(validation, files)
 
 
-def _md(text: str) -> str:
-    """Model names inside a Markdown table: no pipes, backticks or line breaks."""
-    return " ".join(text.replace("|", "/").replace("`", "'").split())
-
-
 def _output_readme(model: Model, source: Path, documents: tuple[ScxmlDocument, ...]) -> str:
     swarms = [
         {
-            "name": _md(s.name),
-            "members": [{"count": p.count, "type": _md(p.type_name)} for p in s.members],
+            "name": markdown_cell(s.name),
+            "members": [{"count": p.count, "type": markdown_cell(p.type_name)} for p in s.members],
         }
         for s in model.swarms
     ]
     rows = [
         {
             "path": f"scxml/{d.name}.scxml",
-            "member": _md(d.member or "-"),
-            "machine": _md(d.machine),
+            "member": markdown_cell(d.member or "-"),
+            "machine": markdown_cell(d.machine),
             "states": d.states,
             "transitions": d.transitions,
         }
@@ -140,9 +143,9 @@ def _output_readme(model: Model, source: Path, documents: tuple[ScxmlDocument, .
     ]
     return render(
         "common/README.md.j2",
-        version=__version__,
-        source=_md(source.name),
-        model=_md(model.name),
+        markup_header=header(markdown_cell(source.name), syntax="<!--"),
+        source=markdown_cell(source.name),
+        model=markdown_cell(model.name),
         swarms=swarms,
         documents=rows,
     )

@@ -26,18 +26,20 @@ from typing import Any
 
 from swarmgen import diagnostics as dg
 from swarmgen import jsonfile, pipeline
+from swarmgen.backends import runnable
 from swarmgen.backends.asyncio_backend import member_modules, package_name
-from swarmgen.chart.lower import lower
+from swarmgen.chart.model import Chart
 from swarmgen.console import shown
+from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import Model
 
 SYSTEM_PYTHON = "/usr/bin/python3"
 QT_SCRIPT = Path(__file__).resolve().parent / "scxml" / "qt_script.py"
-BACKENDS = ("asyncio", "smach", "scxml", "rclpy")
+BACKENDS = tuple(runnable())  # from the registry: every output replay can run
 _unique = itertools.count()
 
 
-class ReplayError(Exception):
+class ReplayError(SwarmgenError):
     """The model, member, scenario or backend cannot be replayed (a user error)."""
 
 
@@ -121,12 +123,12 @@ def replay_many(
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         raise ReplayError(dg.refusal_line(model, validation.diagnostics))
-    charts = {c.member or c.name: c for c in lower(validation.model)}
+    charts = {c.member or c.name: c for c in validation.charts}
     if member not in charts:
         raise ReplayError(f"no member type '{member}'; choose one of: {', '.join(sorted(charts))}")
     if backend not in BACKENDS:
         raise ReplayError(f"unknown backend '{backend}'; choose one of: {', '.join(BACKENDS)}")
-    result = pipeline.compile_model(model, backends=[backend] if backend != "scxml" else [])
+    result = pipeline.compile_model(model, backends=[backend])
     with tempfile.TemporaryDirectory(prefix="swarmgen-replay-") as tmp:
         out = Path(tmp) / "out"
         pipeline.write_tree(result.files, out)
@@ -134,7 +136,9 @@ def replay_many(
         if backend == "scxml":
             traces = run_qt_many(out / "scxml" / f"{chart.name}.scxml", scenarios)
         elif backend == "rclpy":
-            traces = _run_rclpy(out / "rclpy", validation.model, chart.name, scenarios)
+            traces = _run_rclpy(
+                out / "rclpy", validation.model, validation.charts, chart.name, scenarios
+            )
         else:
             package = out / backend / package_name(validation.model)
             module_name = member_modules(tuple(charts.values()))[chart.name]
@@ -185,13 +189,17 @@ def _run_python(
 
 
 def _run_rclpy(
-    rclpy_dir: Path, model: Model, chart_name: str, scenarios: Sequence[Sequence[dict[str, Any]]]
+    rclpy_dir: Path,
+    model: Model,
+    charts: Sequence[Chart],
+    chart_name: str,
+    scenarios: Sequence[Sequence[dict[str, Any]]],
 ) -> list[list[dict[str, Any]]]:
     """One member node on real rclpy, in a subprocess (see swarmgen.ros.harness)."""
     from swarmgen.ros import harness
 
     try:
-        return harness.replay_rclpy(rclpy_dir, model, lower(model), chart_name, scenarios)
+        return harness.replay_rclpy(rclpy_dir, model, charts, chart_name, scenarios)
     except (harness.RosUnavailable, harness.RosRunError) as err:
         raise ReplayError(str(err)) from None
 

@@ -13,17 +13,34 @@ from pathlib import Path
 import pytest
 import xmlschema
 
-ROOT = Path(__file__).resolve().parent.parent
-SHARED = ROOT.parent / "shared"
-XMI_SAMPLES = SHARED / "reference" / "xmi_samples"
-SCXML_XSD = SHARED / "reference" / "scxml_xsd"
-SAMPLE_MODELS = sorted(ROOT.glob("sample_models/*/*.xmi"))
-# The reference corpus lives in ../shared, which CI has and a user's clone does not: the tests
-# over it are then reported as skipped.
-HAS_SHARED = XMI_SAMPLES.is_dir() and SCXML_XSD.is_dir()
-requires_shared = pytest.mark.skipif(
-    not HAS_SHARED, reason=f"the reference corpus is not beside this clone: {SHARED}"
+from tests.skips import (  # the skip policy's hooks, active in every run
+    REFERENCE_REASON,
+    pytest_collectreport,
+    pytest_runtest_logreport,
+    pytest_sessionfinish,
 )
+
+__all__ = ["pytest_collectreport", "pytest_runtest_logreport", "pytest_sessionfinish"]
+
+ROOT = Path(__file__).resolve().parent.parent
+# The external reference corpus (xmi_samples/, scxml_xsd/): CI has it in ../shared/reference,
+# a user's clone does not; SWARMGEN_REFERENCE_DIR points elsewhere. Without it, the tests over it
+# are reported as skipped, the only skips `make test` allows (tests/skips.py).
+REFERENCE = Path(
+    os.environ.get("SWARMGEN_REFERENCE_DIR") or ROOT.parent / "shared" / "reference"
+).resolve()
+XMI_SAMPLES = REFERENCE / "xmi_samples"
+SCXML_XSD = REFERENCE / "scxml_xsd"
+SAMPLE_MODELS = sorted(ROOT.glob("sample_models/*/*.xmi"))
+HAS_SHARED = XMI_SAMPLES.is_dir() and SCXML_XSD.is_dir()
+
+
+def reference_absent(what: Path | str = REFERENCE) -> str:
+    """The skip reason for a test over the reference corpus (the one `make test` allows)."""
+    return f"{REFERENCE_REASON} (set SWARMGEN_REFERENCE_DIR, or ../shared/reference): {what}"
+
+
+requires_shared = pytest.mark.skipif(not HAS_SHARED, reason=reference_absent())
 SYSTEM_PYTHON = "/usr/bin/python3"
 QT_SCRIPT = ROOT / "swarmgen" / "scxml" / "qt_script.py"
 
@@ -42,8 +59,8 @@ def update_golden(request: pytest.FixtureRequest) -> bool:
 
 
 def xmi_sample_files() -> list[Path]:
-    """The reference XMI files in ../shared (none in a user's clone: the tests over them are
-    then reported as skipped, pytest's rule for an empty parameter set)."""
+    """The reference XMI files (none without the corpus: the tests over them then run on the
+    sample models only, or are skipped by `requires_shared`)."""
     if not XMI_SAMPLES.is_dir():
         return []
     return sorted(p for p in XMI_SAMPLES.iterdir() if p.suffix in {".xmi", ".uml"})
@@ -52,7 +69,7 @@ def xmi_sample_files() -> list[Path]:
 @pytest.fixture(scope="session")
 def scxml_schema() -> xmlschema.XMLSchema:
     if not (SCXML_XSD / "scxml.xsd").is_file():
-        pytest.skip(f"the W3C SCXML schema is not beside this clone: {SCXML_XSD}")
+        pytest.skip(reference_absent(SCXML_XSD / "scxml.xsd"))
     return xmlschema.XMLSchema(
         str(SCXML_XSD / "scxml.xsd"),
         uri_mapper={"http://www.w3.org/2001/xml.xsd": str(SCXML_XSD / "xml.xsd")},
@@ -81,8 +98,8 @@ def qt_available() -> None:
     probe = subprocess.run(
         [SYSTEM_PYTHON, "-c", "import PySide2.QtScxml"], capture_output=True, check=False
     )
-    if probe.returncode != 0:
-        pytest.fail(
+    if probe.returncode != 0:  # a failure under `make test`, which installs it (tests/skips.py)
+        pytest.skip(
             "Qt SCXML is not installed: run `make sysdeps` (Debian python3-pyside2.qtscxml)"
         )
 
@@ -100,6 +117,17 @@ def run_cli(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[
 
 def which(name: str) -> str | None:
     return shutil.which(name)
+
+
+def tool(name: str) -> str:
+    """A console script of the environment running the tests: beside its interpreter (a venv's
+    bin/, wherever that venv is), else on PATH."""
+    beside = Path(sys.executable).parent / name
+    if beside.is_file():
+        return str(beside)
+    found = shutil.which(name)
+    assert found, f"{name} is neither beside {sys.executable} nor on PATH: pip install -e '.[dev]'"
+    return found
 
 
 def qt_run(

@@ -17,8 +17,9 @@ from swarmgen import diagnostics as dg
 from swarmgen import graph, pipeline
 from swarmgen.ir.nodes import Model
 from swarmgen.ir.query import composition
-from swarmgen.sim import run as sim
 from swarmgen.sim import scenario as sc
+from swarmgen.sim.machines import compile_machines
+from swarmgen.sim.sweep import configurations
 from tests.modelkit import ModelKit
 
 TWO_PARTS = [("uavs1", "UAV", 2), ("uavs2", "UAV", 3)]
@@ -144,9 +145,9 @@ def test_rclpy_launch_file_starts_every_member(compiled: dict[PurePosixPath, str
 
 
 def test_simulate_defaults_to_the_sum(two_parts: Path) -> None:
-    machines = sim.compile_machines(two_parts)
+    machines = compile_machines(two_parts)
     assert machines.composition == {"UAV": 5, "UGV": 1}
-    configs = sim.configurations(machines, sc.parse({"name": "default counts"}))
+    configs = configurations(machines, sc.parse({"name": "default counts"}))
     assert [dict(c.counts) for c in configs] == [{"UAV": 5, "UGV": 1}]
 
 

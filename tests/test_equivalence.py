@@ -23,8 +23,9 @@ import pytest
 from swarmgen import pipeline, replay
 from swarmgen.backends import names as backend_names
 from swarmgen.chart.lower import lower
-from tests.conftest import ROOT, SAMPLE_MODELS, XMI_SAMPLES
+from tests.conftest import ROOT, SAMPLE_MODELS, XMI_SAMPLES, reference_absent
 from tests.scenarios import ScenarioMaker, failure_scenarios
+from tests.skips import need_rclpy
 
 WALKS = 16
 WALK_LENGTH = 40
@@ -45,7 +46,7 @@ MISSING = [m for m in _ALL_MODELS if not m.exists()]
 
 def test_reference_models_are_here() -> None:
     if MISSING:
-        pytest.skip(f"not beside this clone: {', '.join(m.name for m in MISSING)}")
+        pytest.skip(reference_absent(", ".join(m.name for m in MISSING)))
     assert len(MODELS) == len(_ALL_MODELS)
 
 
@@ -99,7 +100,9 @@ def test_backends_agree_with_qt_scxml(model: Path, member: str, qt_available: No
     assert len(configurations) >= 2, (
         f"the walks should visit several configurations: {configurations}"
     )
-    for backend in PYTHON_BACKENDS:
+    for backend in sorted(PYTHON_BACKENDS, key=lambda b: b == "rclpy"):
+        if backend == "rclpy":
+            need_rclpy()  # last: without the `ros` extra, the others were still compared
         traces = replay.replay_many(model, member, scenarios, backend)
         for number, (ours, theirs) in enumerate(zip(traces, reference, strict=True)):
             assert ours == theirs, _first_difference(
@@ -215,6 +218,7 @@ def rclpy_traces() -> dict[tuple[str, str], tuple[list[list[dict[str, Any]]], li
     """One rclpy replay per case (a subprocess; the interfaces are built once and kept in the
     venv): the sampled scenarios, and for the firewatch scout also the focused ones.
     Replay runs with ROS discovery off (swarmgen.ros.harness), so no DDS traffic leaves it."""
+    need_rclpy()
     runs: dict[tuple[str, str], tuple[list[list[dict[str, Any]]], list[Trace]]] = {}
     for model, member in RCLPY_CASES:
         scenarios = _rclpy_sample(model, member)

@@ -26,7 +26,8 @@ from tests.hostile import ROOT, SAMPLE, Outcome, assert_clean, assert_refused, s
 
 pytest.importorskip("rosbags", reason="rosbags comes with the `ros` extra: run `make ros`")
 
-from swarmgen.trace.bag import read_events, record_replay
+from swarmgen.trace.reader import read_events
+from swarmgen.trace.recorder import record_replay
 
 MISSION = ROOT / "sample_models" / "sar" / "scenarios" / "uav_mission.json"
 LONG = "a/" * 2500  # a 5,000-character path

@@ -15,17 +15,20 @@ import json
 import os
 import subprocess
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
-import psutil
 import pytest
+
+pytest.importorskip("rclpy", reason="rclpy comes with the `ros` extra: run `make ros`")
+pytest.importorskip("psutil", reason="psutil comes with the `ros` extra: run `make ros`")
+
+import psutil
 
 from swarmgen import pipeline
 from swarmgen.backends.rclpy_backend import interfaces_package, nodes_package
 from swarmgen.ros import harness
-from swarmgen.trace.bag import read_events
+from swarmgen.trace.reader import read_events
 from tests.conftest import ROOT
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
@@ -77,7 +80,7 @@ publisher = node.create_publisher(msg.Event, "/swarm/events", EVENTS)
 ids = iter(range(1, 1000))
 recorder = None
 if bag:  # the live recorder of swarmgen.trace: raw subscriptions, bytes into the bag
-    from swarmgen.trace.bag import BagRecorder
+    from swarmgen.trace.recorder import BagRecorder
     from swarmgen.trace.live import LiveRecorder
 
     recorder = BagRecorder(bag, package=interfaces)
@@ -106,6 +109,17 @@ def final(member):
     return any(s in finals for s in states.get(member, []))
 
 
+def left(member, state):  # the member was seen in `state` and has left it since
+    entered = False
+    for _, who, active in history:
+        if who == member:
+            if state in active:
+                entered = True
+            elif entered:
+                return True
+    return False
+
+
 result = {"ok": False}
 try:
     def listening():  # every member subscribes, and the publisher matched every subscription
@@ -122,8 +136,7 @@ try:
         publish("missionStart")
         wait(lambda: seen("targetRescued"), "rescue")
     else:  # take-off only: uav_1 takes off, uav_2's TakeOff is aborted
-        wait(lambda: "Loitering" in states["uav_1"], "take-off")
-        time.sleep(0.3)  # uav_2's TakeOff (0.2 s) has ended too
+        wait(lambda: "Loitering" in states["uav_1"] and left("uav_2", "TakeOff"), "take-off")
     publish("missionAbort")
     wait(lambda: all(final(m) for m in members), "stop")
     result["ok"] = True
@@ -212,7 +225,6 @@ def test_sar_swarm_rescues_and_stops_on_real_dds(sar: dict[str, Any], tmp_path: 
     members = ["uav_1", "uav_2", "ugv_1", "ugv_2"]
     station_py = tmp_path / "station.py"
     station_py.write_text(STATION, encoding="utf-8")
-    started = time.monotonic()
     swarm = _run(
         [
             sys.executable, "-m", f"{sar['package']}.launch_swarm", "--uav", "2", "--ugv", "2",
@@ -229,7 +241,6 @@ def test_sar_swarm_rescues_and_stops_on_real_dds(sar: dict[str, Any], tmp_path: 
     )  # fmt: skip
     station_code, station_out, station_err = _finish(station, 70)
     swarm_code, swarm_out, swarm_err = _finish(swarm, 30)
-    elapsed = time.monotonic() - started
     assert station_code == 0, station_err[-3000:]
     seen = json.loads(station_out.strip().splitlines()[-1])
     assert seen["ok"], seen.get("error")
@@ -270,7 +281,7 @@ def test_sar_swarm_rescues_and_stops_on_real_dds(sar: dict[str, Any], tmp_path: 
     assert rescued["sender"] == f"ugv_{assigned[0]['data']['rover_id']}"
     assert events.index(found[0]) < events.index(assigned[0]) < events.index(rescued)
     assert seen["states"]["uav_1"] == ["Landed"] and seen["states"]["ugv_2"] == ["Stopped"]
-    assert elapsed < 45, elapsed
+    # no wall-clock bound here: a slow or stuck run is `timeout`'s exit 124, not 0 (above)
 
     # the run's bag, recorded live: read with swarmgen.trace (rosbags)
     (run,) = read_events([tmp_path / "bag"])

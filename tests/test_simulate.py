@@ -13,9 +13,12 @@ import pytest
 from click.testing import CliRunner
 
 from swarmgen.cli import main
-from swarmgen.sim import run as sim
 from swarmgen.sim import scenario as sc
+from swarmgen.sim.batch import Batch
+from swarmgen.sim.machines import Machines, compile_machines
+from swarmgen.sim.run import outputs
 from swarmgen.sim.stats import estimate, kth, t975
+from swarmgen.sim.sweep import Simulation, configurations, simulate
 from tests.conftest import SAMPLE_MODELS
 from tests.modelkit import ModelKit
 
@@ -24,8 +27,8 @@ STATION = [{"tick": 0, "event": "launch"}, {"tick": 10, "event": "missionStart"}
 
 
 @pytest.fixture(scope="module")
-def sar_machines() -> sim.Machines:
-    return sim.compile_machines(SAR)
+def sar_machines() -> Machines:
+    return compile_machines(SAR)
 
 
 def scenario(**fields: Any) -> sc.Scenario:
@@ -34,7 +37,7 @@ def scenario(**fields: Any) -> sc.Scenario:
     return sc.parse(payload)
 
 
-def means(result: sim.Simulation, pick: Any) -> dict[int, list[float]]:
+def means(result: Simulation, pick: Any) -> dict[int, list[float]]:
     """config index -> per level, the mean over repetitions (every run must reach it)."""
     out: dict[int, list[float]] = {}
     for index in range(len(result.configs)):
@@ -49,13 +52,13 @@ def means(result: sim.Simulation, pick: Any) -> dict[int, list[float]]:
 
 
 @pytest.fixture(scope="module")
-def coverage(sar_machines: sim.Machines) -> sim.Simulation:
+def coverage(sar_machines: Machines) -> Simulation:
     """The paper's coverage experiment (201 x 201, 1/2/4/8 UAVs, to 100 percent), 30 reps."""
     chosen = sc.load("coverage").with_overrides(reps=30, seed=11)
-    return sim.simulate(sar_machines, chosen, workers=2)
+    return simulate(sar_machines, chosen, workers=2)
 
 
-def test_coverage_time_halves_when_the_swarm_doubles(coverage: sim.Simulation) -> None:
+def test_coverage_time_halves_when_the_swarm_doubles(coverage: Simulation) -> None:
     """Doubling the UAVs roughly halves the time to 50 .. 96.875 percent (they cover
     disjoint ground most of the time, so the area per tick doubles)."""
     sizes = [dict(c.counts)["UAV"] for c in coverage.configs]
@@ -68,7 +71,7 @@ def test_coverage_time_halves_when_the_swarm_doubles(coverage: sim.Simulation) -
     assert all(r.reason == "coverage" and r.coverage_final == 1.0 for r in coverage.runs)
 
 
-def test_coverage_time_rises_steeply_with_the_level(coverage: sim.Simulation) -> None:
+def test_coverage_time_rises_steeply_with_the_level(coverage: Simulation) -> None:
     """Each halving of the uncovered area takes about as long as covering the first half
     (uncovered area decays exponentially in time): the levels 50, 75, 87.5, 93.75, 96.875
     percent are reached at about 1, 2, 3, 4, 5 times the 50 percent time; the last patch
@@ -84,17 +87,17 @@ def test_coverage_time_rises_steeply_with_the_level(coverage: sim.Simulation) ->
 # --- search and rescue ------------------------------------------------------------------------
 
 
-def test_rescue_follows_search(sar_machines: sim.Machines) -> None:
+def test_rescue_follows_search(sar_machines: Machines) -> None:
     """Every target is first found, then rescued when its UGV has driven there: never before,
     and on average later by at least the drive."""
     chosen = sc.load("sar").with_overrides({"UAV": [1, 4]}, [4], reps=6, seed=3)
-    result = sim.simulate(sar_machines, chosen)
+    result = simulate(sar_machines, chosen)
     assert all(r.reason == "rescued" for r in result.runs)
     for run in result.runs:
         for found, rescued in zip(run.found, run.rescued, strict=True):
             assert found is not None and rescued is not None
             assert rescued > found
-    summary = sim.outputs(result)
+    summary = outputs(result)
     payload = json.loads(summary["results.json"])
     for search, rescue in zip(
         payload["summary"]["search"], payload["summary"]["rescue"], strict=True
@@ -109,22 +112,22 @@ def test_rescue_follows_search(sar_machines: sim.Machines) -> None:
 # --- reproducibility --------------------------------------------------------------------------
 
 
-def test_same_seed_same_numbers_whatever_the_workers(sar_machines: sim.Machines) -> None:
+def test_same_seed_same_numbers_whatever_the_workers(sar_machines: Machines) -> None:
     """One configuration, so two workers split its repetitions into separate batches in
     separate processes: the numbers must not change."""
     chosen = sc.load("sar").with_overrides({"UAV": [2]}, [3], reps=4, seed=7)
-    one = sim.simulate(sar_machines, chosen, workers=1)
-    two = sim.simulate(sar_machines, chosen, workers=2)
-    again = sim.simulate(sar_machines, chosen, workers=1)
+    one = simulate(sar_machines, chosen, workers=1)
+    two = simulate(sar_machines, chosen, workers=2)
+    again = simulate(sar_machines, chosen, workers=1)
     assert one.runs == two.runs == again.runs
-    other = sim.simulate(sar_machines, chosen.with_overrides(seed=8), workers=1)
+    other = simulate(sar_machines, chosen.with_overrides(seed=8), workers=1)
     assert [r.found for r in other.runs] != [r.found for r in one.runs]
 
 
 # --- tiny worlds, by hand ---------------------------------------------------------------------
 
 
-def test_tiny_coverage_world_by_hand(sar_machines: sim.Machines) -> None:
+def test_tiny_coverage_world_by_hand(sar_machines: Machines) -> None:
     """A 3 x 5 world (15 patches), one UAV at the centre of the south side, patch (1, 0).
     launch at tick 0, TakeOff takes 5 ticks, missionStart at tick 10 = time 0; one UAV departs
     north (the single direction dividing 180 degrees). It sees its patch and the 8 around it,
@@ -137,13 +140,13 @@ def test_tiny_coverage_world_by_hand(sar_machines: sim.Machines) -> None:
     ceil(13.125) = 14 -> 3; 93.75% and 96.875% need 15 -> 3; 100% -> 3. The run ends at
     tick 13."""
     chosen = scenario(world={"width": 3, "height": 5}, members={"UAV": [1], "UGV": 0}, reps=1)
-    (result,) = sim.simulate(sar_machines, chosen).runs
+    (result,) = simulate(sar_machines, chosen).runs
     assert result.coverage == [1, 2, 3, 3, 3, 3]
     assert (result.reason, result.end_tick, result.coverage_final) == ("coverage", 13, 1.0)
     assert result.events == 3  # launch, TakeOff's outcome, missionStart
 
 
-def test_tiny_sar_world_by_hand(sar_machines: sim.Machines) -> None:
+def test_tiny_sar_world_by_hand(sar_machines: Machines) -> None:
     """A 3 x 9 world, one UAV and its UGV at (1, 0), one target at (1, 8).
     The UAV flies north from time 0; the target's row 8 comes into view when the UAV is at
     y = 7: found at time 7 (targetFound: the UAV goes to SelectRover, the UGV to Bidding).
@@ -157,7 +160,7 @@ def test_tiny_sar_world_by_hand(sar_machines: sim.Machines) -> None:
         stop="rescued",
         reps=1,
     )
-    batch = sim.Batch(sar_machines, chosen, sim.configurations(sar_machines, chosen)[0], [0])
+    batch = Batch(sar_machines, chosen, configurations(sar_machines, chosen)[0], [0])
     (result,) = batch.run_all()
     assert (result.found, result.rescued) == ([7], [16])
     assert (result.reason, result.end_tick) == ("rescued", 26)
@@ -210,7 +213,7 @@ def mini(tmp_path: Path, cover: str | None) -> Path:
 def test_the_machine_decides_what_runs(
     tmp_path: Path, cover: str | None, library: dict[str, str], covered: bool
 ) -> None:
-    machines = sim.compile_machines(mini(tmp_path, cover))
+    machines = compile_machines(mini(tmp_path, cover))
     chosen = scenario(
         world={"width": 21, "height": 21},
         station=[{"tick": 0, "event": "launch"}],
@@ -219,7 +222,7 @@ def test_the_machine_decides_what_runs(
         max_ticks=20_000,
         reps=2,
     )
-    result = sim.simulate(machines, chosen)
+    result = simulate(machines, chosen)
     assert [dict(c.counts) for c in result.configs] == [{"UAV": 2}]  # the model's composition
     for run in result.runs:
         if covered:
@@ -300,7 +303,7 @@ def test_cli_records_one_bag_per_run(tmp_path: Path) -> None:
     workers; `swarmgen timeline` over them has launch first, and in every run the first
     targetFound comes before the first targetRescued."""
     pytest.importorskip("rosbags", reason="rosbags comes with the `ros` extra: run `make ros`")
-    from swarmgen.trace.bag import read_events
+    from swarmgen.trace.reader import read_events
     from tests.conftest import run_cli
     from tests.test_trace import read_with_rosbags_only
 

@@ -31,14 +31,13 @@ from swarmgen.runtime import smach
 from swarmgen.runtime.chart import Context
 from swarmgen.runtime.member import InMemoryBus
 from swarmgen.runtime.simulated import Script, SimulatedLibrary
-from tests.conftest import ROOT, SAMPLE_MODELS, run_cli, xmi_sample_files
+from tests.conftest import ROOT, SAMPLE_MODELS, run_cli, tool, xmi_sample_files
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 UAV_MISSION = ROOT / "sample_models" / "sar" / "scenarios" / "uav_mission.json"
 BAD = ROOT / "tests" / "fixtures" / "bad"
 HOSTILE = BAD / "hostile_names.xmi"
-RUFF = [
-    str(ROOT / ".venv" / "bin" / "ruff"),
+RUFF_CHECK = [
     "check",
     "--isolated",
     "--select",
@@ -131,7 +130,11 @@ def assert_same_chart(asyncio_module: ModuleType, smach_module: ModuleType) -> N
 
 def ruff(*paths: Path) -> None:
     result = subprocess.run(
-        [*RUFF, *map(str, paths)], capture_output=True, text=True, cwd=paths[0].parent, check=False
+        [tool("ruff"), *RUFF_CHECK, *map(str, paths)],
+        capture_output=True,
+        text=True,
+        cwd=paths[0].parent,
+        check=False,
     )
     assert result.returncode == 0, result.stdout + result.stderr
 

@@ -24,15 +24,9 @@ import pytest
 pytest.importorskip("rosbags", reason="rosbags comes with the `ros` extra: run `make ros`")
 
 from swarmgen.trace import timeline as timelines
-from swarmgen.trace.bag import (
-    BagRecorder,
-    VirtualClock,
-    camel,
-    legacy_event,
-    read_events,
-    read_run,
-    states_topic,
-)
+from swarmgen.trace.bag import states_topic
+from swarmgen.trace.reader import camel, legacy_event, read_events, read_run
+from swarmgen.trace.recorder import BagRecorder, VirtualClock
 from tests.conftest import ROOT, run_cli
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
@@ -114,6 +108,12 @@ def replayed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         assert f"recorded 10 step(s) into {bag}" in stderr
         results[key] = (bag, [json.loads(line) for line in stdout.splitlines()])
     return {"bags": results, "steps": json.loads(MISSION.read_text())["steps"]}
+
+
+@pytest.mark.skipif(not HAS_RCLPY, reason="rclpy comes with the `ros` extra: run `make ros`")
+def test_replay_is_recorded_on_rclpy_too(replayed: dict[str, Any]) -> None:
+    """`replayed` leaves rclpy out without the `ros` extra: that shows here as a skip."""
+    assert ("rclpy", "mcap") in replayed["bags"]
 
 
 def test_replay_bags_are_read_by_rosbags_alone(replayed: dict[str, Any]) -> None:
@@ -509,7 +509,7 @@ LIVE = textwrap.dedent(
     import sys, time, json
     import rclpy
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from swarmgen.trace.bag import BagRecorder
+    from swarmgen.trace.recorder import BagRecorder
     from swarmgen.trace.live import LiveRecorder
     package, out = sys.argv[1], sys.argv[2]
     msg = __import__(package + ".msg", fromlist=["Event"])

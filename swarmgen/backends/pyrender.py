@@ -6,6 +6,7 @@ Every string that comes from the model is printed with `repr()`, so it stays a s
 
 from __future__ import annotations
 
+import ast
 import functools
 from dataclasses import dataclass, field
 from typing import Any
@@ -29,11 +30,23 @@ def format_python(source: str) -> str:
     return black.format_str(source, mode=BLACK_MODE)
 
 
+# What each kind of helper function returns: guards, actions, call arguments and goal callbacks.
+RETURNS = {"cond": "bool", "action": "None", "args": "dict[str, Any]", "goal": "dict[str, Any]"}
+
+
 @dataclass(frozen=True)
 class Function:
+    """A helper function of a member module: `def <name>(ctx: Context) -> <returns>: <body>`."""
+
     name: str
-    kind: str  # "cond", "action" or "args"
+    kind: str  # a key of RETURNS
     body: tuple[str, ...]
+    reads_data: bool = False  # the body uses the datamodel `d` (then `d = ctx.data` first)
+
+    @property
+    def returns(self) -> str:
+        """The function's return annotation."""
+        return RETURNS[self.kind]
 
 
 @dataclass
@@ -68,8 +81,12 @@ class ChartRenderer:
         self.code = ChartCode()
         self.data_ids = {d.name: d.id for d in chart.data}
         self._counter = 0
+        # whether code rendered since the last helper function reads or writes `d`: every
+        # expression is rendered right before the function that holds it
+        self._reads_data = False
 
     def render(self) -> ChartCode:
+        """The chart's helper functions and `ChartBuilder` statements, in document order."""
         items = ", ".join(f"{d.id!r}: {py_literal(d.initial)}" for d in self.chart.data)
         self.code.data_literal = "{" + items + "}"
         for node in self.chart.children:
@@ -80,29 +97,36 @@ class ChartRenderer:
     # --- expressions
 
     def py(self, e: expr.Expr | c.FieldDefault) -> str:
+        """An expression (or an event field's default) as Python source over `d` and `ctx`."""
         if isinstance(e, c.FieldDefault):
             return py_literal(e.value)
         return expr.to_python(
             e,
-            name=lambda n: f"d[{(self.data_ids.get(n) or identifier(n))!r}]",
+            name=self._data,
             # a field the event does not carry is an error, as `$sg.field` in the SCXML
             event_field=lambda f: f"ctx.field({identifier(f)!r})",
         )
 
+    def _data(self, name: str) -> str:
+        """A datamodel item as code: `d['id']`."""
+        self._reads_data = True
+        return f"d[{(self.data_ids.get(name) or identifier(name))!r}]"
+
     def _function(self, kind: str, body: list[str]) -> str:
         self._counter += 1
         name = f"_{kind}_{self._counter}"
-        self.code.functions.append(Function(name, kind, tuple(body)))
+        self.code.functions.append(Function(name, kind, tuple(body), self._reads_data))
+        self._reads_data = False
         return name
 
     def _cond(self, transition: c.Transition) -> str | None:
+        """The guard function; `bool(a < b)`, not `bool((a < b))` (ruff UP034)."""
         parts = [f"ctx.is_active({s!r})" for s in transition.in_states]
         if transition.cond is not None:
             parts.append(self.py(transition.cond))
         if not parts:
             return None
-        joined = " and ".join(parts) if len(parts) > 1 else _unwrap(parts[0])
-        return self._function("cond", [f"return bool({joined})"])
+        return self._function("cond", [f"return bool({_unwrap(' and '.join(parts))})"])
 
     def _action(self, actions: tuple[c.Action, ...]) -> str | None:
         lines = [line for action in actions for line in self._action_lines(action)]
@@ -110,12 +134,33 @@ class ChartRenderer:
 
     def _action_lines(self, action: c.Action) -> list[str]:
         if isinstance(action, c.Assign):
+            self._reads_data = True
             return [f"d[{action.location!r}] = {self.py(action.value)}"]
         if isinstance(action, c.Raise | c.Send):
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
             return [f"ctx.{method}({action.event!r}, {data if action.params else 'None'})"]
         return [f"ctx.opaque({action.language!r}, {action.text!r})"]
+
+    def _hooks(self, node: c.Node) -> list[str]:
+        """The `onentry=` and `onexit=` options of a state (its action functions, if any)."""
+        hooks = [("onentry", self._action(node.onentry)), ("onexit", self._action(node.onexit))]
+        return [f"{key}={function}" for key, function in hooks if function]
+
+    def _transition_options(self, transition: c.Transition, guard: str) -> list[str]:
+        """The guard (option `guard`), action, `internal` and `bounded` options of a transition."""
+        options = []
+        cond = self._cond(transition)
+        if cond:
+            options.append(f"{guard}={cond}")
+        action = self._action(transition.actions)
+        if action:
+            options.append(f"action={action}")
+        if transition.internal:
+            options.append("internal=True")
+        if transition.bounded:  # the step bound counts it (docs/semantics.md)
+            options.append("bounded=True")
+        return options
 
     def _args(self, call: c.Call) -> str:
         items = ", ".join(f"{a.name!r}: {self.py(a.value)}" for a in call.args)
@@ -127,12 +172,7 @@ class ChartRenderer:
         options = [f"name={(node.name or node.id)!r}"]
         if node.history:
             options.append(f"history={node.history!r}")
-        entry = self._action(node.onentry)
-        if entry:
-            options.append(f"onentry={entry}")
-        exit_ = self._action(node.onexit)
-        if exit_:
-            options.append(f"onexit={exit_}")
+        options.extend(self._hooks(node))
         if node.call is not None:
             call = node.call
             options.append(
@@ -156,17 +196,7 @@ class ChartRenderer:
             self._transition(node.id, transition)
 
     def _transition(self, source: str, transition: c.Transition) -> None:
-        options = []
-        cond = self._cond(transition)
-        if cond:
-            options.append(f"cond={cond}")
-        action = self._action(transition.actions)
-        if action:
-            options.append(f"action={action}")
-        if transition.internal:
-            options.append("internal=True")
-        if transition.bounded:  # the step bound counts it (docs/semantics.md)
-            options.append("bounded=True")
+        options = self._transition_options(transition, "cond")
         head = (
             f"b.transition({source!r}, {tuple(transition.events)!r}, {tuple(transition.targets)!r}"
         )
@@ -174,13 +204,13 @@ class ChartRenderer:
 
 
 def _unwrap(text: str) -> str:
-    """`(a < b)` -> `a < b` when the outer parentheses enclose everything (ruff UP034)."""
-    if not (text.startswith("(") and text.endswith(")")):
-        return text
-    depth = 0
-    for index, char in enumerate(text):
-        depth += char == "("
-        depth -= char == ")"
-        if depth == 0 and index < len(text) - 1:
-            return text  # `(a) and (b)`: the first parenthesis closes early
-    return text[1:-1]
+    """`(a < b)` -> `a < b`: the outer parentheses go when they enclose the whole expression
+    (then the text without them is an expression too, token for token; counting parentheses
+    would be fooled by those inside string literals)."""
+    if text.startswith("(") and text.endswith(")"):
+        try:
+            ast.parse(text[1:-1], mode="eval")
+        except SyntaxError:
+            return text
+        return text[1:-1]
+    return text

@@ -24,21 +24,16 @@ import json
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass
-from pathlib import Path, PurePosixPath
+from pathlib import PurePosixPath
 from typing import Any
 from xml.sax.saxutils import escape
 
-from swarmgen import __version__
-from swarmgen.backends import Files
-from swarmgen.backends.asyncio_backend import script_specs
-from swarmgen.backends.pyrender import (
-    ChartRenderer,
-    event_fields_literal,
-    format_python,
-    py_literal,
-)
-from swarmgen.backends.vendor import runtime_files
+from swarmgen.backends import Files, pycommon
+from swarmgen.backends.pycommon import common_view, member_view, script_specs
+from swarmgen.backends.pyrender import ChartRenderer, format_python, py_literal
+from swarmgen.backends.vendor import ros_runtime_files, runtime_files
 from swarmgen.chart.model import BehaviourInfo, Chart
+from swarmgen.generated import header, markdown_cell
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import IdAllocator, doc_text, identifier, one_line, ros_name
@@ -55,7 +50,6 @@ from swarmgen.ros.interfaces import (
 )
 
 RUNTIME_MODULES = ("chart", "engine", "member", "replay")
-ROS_RUNTIME_DIR = Path(__file__).resolve().parent.parent / "ros" / "runtime"
 ROS_RUNTIME_MODULES = ("node", "simulated", "launcher", "replay")
 _RESERVED_TYPES = ("Event", "ActiveStates")
 # Module names double as executables and as launcher options (`--uav 2`): keep them clear of
@@ -69,24 +63,23 @@ _ROS_TOKEN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
 
 
 def swarm_name(model: Model) -> str:
+    """The swarm's ROS name, the stem of both package names."""
     return check_package_name(ros_name(model.name or "swarm"))
 
 
 def interfaces_package(model: Model) -> str:
+    """The interface (rosidl) package's name."""
     return f"{swarm_name(model)}_interfaces"
 
 
 def nodes_package(model: Model) -> str:
+    """The node (ament_python) package's name."""
     return f"{swarm_name(model)}_nodes"
 
 
 def member_modules(charts: Iterable[Chart]) -> dict[str, str]:
     """chart name -> module (and node, executable) name: lower snake case, unique."""
-    taken = IdAllocator(_RESERVED_MODULES)
-    return {
-        chart.name: taken.claim(ros_name(chart.name), f"{ros_name(chart.name)}_member")
-        for chart in charts
-    }
+    return pycommon.member_modules(charts, _RESERVED_MODULES, "_member")
 
 
 def field_type(type_name: str | None) -> str:
@@ -99,6 +92,7 @@ def field_type(type_name: str | None) -> str:
 
 
 def is_relative_ros_name(name: str) -> bool:
+    """Whether `name` is a valid relative ROS name (tokens of `_ROS_TOKEN`, no `__`)."""
     tokens = name.split("/")
     return all(_ROS_TOKEN.fullmatch(t) and "__" not in t for t in tokens)
 
@@ -141,6 +135,7 @@ class BehaviourView:
 
     @property
     def action_text(self) -> str:
+        """The behaviour's `.action` file."""
         return behaviour_action(
             [(f.field, f.model_type) for f in self.inputs],
             [(f.field, f.model_type) for f in self.outputs],
@@ -220,20 +215,40 @@ def member_parameters(model: Model, chart: Chart, views: dict[str, BehaviourView
     """`Parameter(...)` literals: member data defaults, hardware parameters (read only) and the
     declared ROS binding of each behaviour the member runs (read only metadata)."""
     taken = IdAllocator()
-    found = []
-    for item in chart.data:
-        name = taken.claim(f"data.{ros_name(item.id)}")
-        found.append(
-            _parameter(
-                name,
-                field_type(item.type),
-                item.initial,
-                data=item.id,
-                description=f"member data {item.name} ({item.type or 'untyped'})",
-            )
+    found = [
+        _parameter(
+            taken.claim(f"data.{ros_name(item.id)}"),
+            field_type(item.type),
+            item.initial,
+            data=item.id,
+            description=f"member data {item.name} ({item.type or 'untyped'})",
         )
+        for item in chart.data
+    ]
+    found += _hardware_parameters(model, chart, taken)
+    for info in chart.behaviours:
+        view = views[info.name]
+        prefix = f"behaviours.{ros_name(info.name)}"
+        for key in ("ros_kind", "ros_name", "ros_type"):
+            value = getattr(info, key)
+            if value:
+                found.append(
+                    _parameter(
+                        taken.claim(f"{prefix}.{key}"),
+                        "string",
+                        value,
+                        read_only=True,
+                        description=f"declared by the model; run as action {view.action} at {view.ros_name}",
+                    )
+                )
+    return found
+
+
+def _hardware_parameters(model: Model, chart: Chart, taken: IdAllocator) -> list[str]:
+    """The member's hardware: part counts, component parameters and communication settings."""
     member = next((m for m in model.member_types if m.name == chart.member), None)
     components = {h.id: h for h in model.hardware}
+    found = []
     for part in member.hardware if member is not None else ():
         prefix = f"hardware.{ros_name(part.name)}"
         found.append(
@@ -258,31 +273,11 @@ def member_parameters(model: Model, chart: Chart, views: dict[str, BehaviourView
                     description=f"{component.name}.{prop.name} ({prop.type or 'untyped'})",
                 )
             )
-        for key, value in (
-            ("communication_type", component.communication_type),
-            ("communication_params", component.communication_params),
-        ):
+        for key in ("communication_type", "communication_params"):
+            value = getattr(component, key)
             if value is not None:
                 found.append(
                     _parameter(taken.claim(f"{prefix}.{key}"), "string", value, read_only=True)
-                )
-    for info in chart.behaviours:
-        view = views[info.name]
-        prefix = f"behaviours.{ros_name(info.name)}"
-        for key, value in (
-            ("ros_kind", info.ros_kind),
-            ("ros_name", info.ros_name),
-            ("ros_type", info.ros_type),
-        ):
-            if value:
-                found.append(
-                    _parameter(
-                        taken.claim(f"{prefix}.{key}"),
-                        "string",
-                        value,
-                        read_only=True,
-                        description=f"declared by the model; run as action {view.action} at {view.ros_name}",
-                    )
                 )
     return found
 
@@ -291,122 +286,142 @@ class RclpyBackend:
     name = "rclpy"
 
     def render(self, model: Model, charts: tuple[Chart, ...]) -> Files:
+        """The interface package, the node package and README.md (see the module docstring)."""
         if not charts:
             return {}  # no state machine, nothing to run
-        swarm = swarm_name(model)
-        interfaces = interfaces_package(model)
-        package = nodes_package(model)
         views = behaviour_views(charts)
-        source = charts[0].source
-        common = {"version": __version__, "source": one_line(source)}
-        files: Files = {}
-
-        description = one_line(f"ROS 2 interfaces of swarm {model.name} (generated by swarmgen)")
-        interface_files = render_interface_package(
-            interfaces,
-            {"Event": EVENT_MSG, "ActiveStates": ACTIVE_STATES_MSG},
-            {v.action: v.action_text for v in views.values()},
-            description,
-        )
-        for path, text in interface_files.items():
-            files[PurePosixPath(interfaces) / path] = text
-
-        root = PurePosixPath(package)
-        python = root / package
-        modules = member_modules(charts)
-        members = {chart.member or chart.name: modules[chart.name] for chart in charts}
-        composition = swarm_composition(model)
-        composition = {kind: composition.get(kind, 1) for kind in members}
-        swarm_counts = {c.name: composition[c.member or c.name] for c in charts}
-        events: dict[str, tuple[str, str]] = {}
-        for event in model.events:
-            events.setdefault(event.name, (event.ident, event.scope or "swarm"))
-        for event in model.events:
-            events.setdefault(event.ident, (event.ident, event.scope or "swarm"))
-        launch_file = f"{swarm}.launch.py"
-        view = {
-            **common,
-            "model": doc_text(model.name),
-            "model_repr": repr(model.name),
-            "package": package,
-            "interfaces": interfaces,
-            "swarm": swarm,
-            "modules": sorted(modules.values()),
-            "members": members,
-            "composition_literal": repr(composition),
-            "interfaces_literal": repr(interfaces),
-            "launch_file": launch_file,
-        }
-
-        for chart in charts:
-            files[python / f"{modules[chart.name]}.py"] = render_member(
-                chart, model, views, modules[chart.name], interfaces, common
-            )
-        files[python / "__init__.py"] = format_python(
-            render(
-                "rclpy/package_init.py.j2",
-                **view,
-                member_modules=repr(members),
-                events_literal=repr(dict(sorted(events.items()))),
-                first_flags=" ".join(f"--{m.replace('_', '-')} 2" for m in members.values()),
-            )
-        )
-        files[python / "behaviours.py"] = format_python(
-            render("rclpy/behaviours.py.j2", **view, scripts=repr(script_specs(charts)))
-        )
-        files[python / "launch_swarm.py"] = format_python(
-            render(
-                "rclpy/launch_swarm.py.j2",
-                **view,
-                first_flags=" ".join(f"--{m.replace('_', '-')} 2" for m in members.values()),
-            )
-        )
-        files[root / "launch" / launch_file] = format_python(
-            render(
-                "rclpy/launch.py.j2",
-                **view,
-                entries=launch_entries(members, composition),
-                swarm_literal=repr(json.dumps(swarm_counts, sort_keys=True)),
-            )
-        )
-        files[root / "setup.py"] = format_python(
-            render(
-                "rclpy/setup.py.j2",
-                **view,
-                description=repr(
-                    one_line(f"Swarm {model.name}: member nodes (generated by swarmgen)")
-                ),
-                entry_points=[f"{m} = {package}.{m}:main" for m in sorted(members.values())],
-            )
-        )
-        files[root / "setup.cfg"] = render("rclpy/setup.cfg.j2", **view)
-        files[root / "package.xml"] = render(
-            "rclpy/package.xml.j2",
-            **view,
-            description=_xml(f"Swarm {model.name}: member nodes, simulated behaviours, launcher"),
-        )
-        files[root / "resource" / package] = ""
-        rows = [
-            {
-                "name": _md(v.info.name),
-                "action": v.action,
-                "ros_name": v.ros_name,
-                "declared": _md(
-                    " ".join(x for x in (v.info.ros_kind, v.info.ros_name, v.info.ros_type) if x)
-                    or "-"
-                ),
-            }
-            for v in views.values()
-        ]
-        files[PurePosixPath("README.md")] = render(
-            "rclpy/README.md.j2", **view, model_md=_md(model.name), behaviours=rows
-        )
-        files.update(runtime_files(python / "_runtime", RUNTIME_MODULES))
-        files.update(ros_runtime_files(python / "_ros"))
+        view = package_view(model, charts)
+        files = interface_files(model, views)
+        files.update(node_modules(model, charts, views, view))
+        files.update(package_files(model, charts, view))
+        files[PurePosixPath("README.md")] = readme(model, views, view)
         return files
 
 
+def package_view(model: Model, charts: tuple[Chart, ...]) -> dict[str, Any]:
+    """What the node package's templates share: names, members and their counts."""
+    swarm = swarm_name(model)
+    interfaces = interfaces_package(model)
+    modules = member_modules(charts)
+    members = {chart.member or chart.name: modules[chart.name] for chart in charts}
+    counts = swarm_composition(model)
+    composition = {kind: counts.get(kind, 1) for kind in members}
+    common = common_view(charts)
+    return {
+        **common,
+        "markup_header": header(common["source"], syntax="<!--"),
+        "model": doc_text(model.name),
+        "model_repr": repr(model.name),
+        "package": nodes_package(model),
+        "interfaces": interfaces,
+        "swarm": swarm,
+        "chart_modules": modules,
+        "modules": sorted(modules.values()),
+        "members": members,
+        "composition": composition,
+        "composition_literal": repr(composition),
+        "interfaces_literal": repr(interfaces),
+        "launch_file": f"{swarm}.launch.py",
+        "first_flags": " ".join(f"--{m.replace('_', '-')} 2" for m in members.values()),
+    }
+
+
+def interface_files(model: Model, views: dict[str, BehaviourView]) -> Files:
+    """`<swarm>_interfaces/`: the messages and one action per behaviour."""
+    interfaces = interfaces_package(model)
+    description = one_line(f"ROS 2 interfaces of swarm {model.name} (generated by swarmgen)")
+    rendered = render_interface_package(
+        interfaces,
+        {"Event": EVENT_MSG, "ActiveStates": ACTIVE_STATES_MSG},
+        {v.action: v.action_text for v in views.values()},
+        description,
+    )
+    return {PurePosixPath(interfaces) / path: text for path, text in rendered.items()}
+
+
+def node_modules(
+    model: Model, charts: tuple[Chart, ...], views: dict[str, BehaviourView], view: dict[str, Any]
+) -> Files:
+    """The Python package of the nodes: member modules, `__init__`, behaviours, launcher and
+    the vendored runtimes."""
+    python = PurePosixPath(view["package"]) / view["package"]
+    modules = view["chart_modules"]
+    common = common_view(charts)
+    files: Files = {}
+    for chart in charts:
+        module = modules[chart.name]
+        files[python / f"{module}.py"] = render_member(
+            chart, model, views, module, view["interfaces"], common
+        )
+    events: dict[str, tuple[str, str]] = {}
+    for key in ("name", "ident"):  # by name first, then by identifier where names are taken
+        for event in model.events:
+            events.setdefault(getattr(event, key), (event.ident, event.scope or "swarm"))
+    init = render(
+        "rclpy/package_init.py.j2",
+        **view,
+        member_modules=repr(view["members"]),
+        events_literal=repr(dict(sorted(events.items()))),
+    )
+    files[python / "__init__.py"] = format_python(init)
+    behaviours = render("rclpy/behaviours.py.j2", **view, scripts=repr(script_specs(charts)))
+    files[python / "behaviours.py"] = format_python(behaviours)
+    files[python / "launch_swarm.py"] = format_python(render("rclpy/launch_swarm.py.j2", **view))
+    files.update(runtime_files(python / "_runtime", RUNTIME_MODULES))
+    files.update(ros_runtime_files(python / "_ros", ROS_RUNTIME_MODULES))
+    return files
+
+
+def package_files(model: Model, charts: tuple[Chart, ...], view: dict[str, Any]) -> Files:
+    """The ament_python package around the nodes: launch file, setup.py/cfg, package.xml."""
+    package = view["package"]
+    root = PurePosixPath(package)
+    composition = view["composition"]
+    swarm_counts = {c.name: composition[c.member or c.name] for c in charts}
+    launch = render(
+        "rclpy/launch.py.j2",
+        **view,
+        entries=launch_entries(view["members"], composition),
+        swarm_literal=repr(json.dumps(swarm_counts, sort_keys=True)),
+    )
+    setup = render(
+        "rclpy/setup.py.j2",
+        **view,
+        description=repr(one_line(f"Swarm {model.name}: member nodes (generated by swarmgen)")),
+        entry_points=[f"{m} = {package}.{m}:main" for m in sorted(view["members"].values())],
+    )
+    package_xml = render(
+        "rclpy/package.xml.j2",
+        **view,
+        description=_xml(f"Swarm {model.name}: member nodes, simulated behaviours, launcher"),
+    )
+    return {
+        root / "launch" / view["launch_file"]: format_python(launch),
+        root / "setup.py": format_python(setup),
+        root / "setup.cfg": render("rclpy/setup.cfg.j2", **view),
+        root / "package.xml": package_xml,
+        root / "resource" / package: "",
+    }
+
+
+def readme(model: Model, views: dict[str, BehaviourView], view: dict[str, Any]) -> str:
+    """README.md of `rclpy/`: the packages, how to run them, each behaviour's action."""
+    rows = []
+    for v in views.values():
+        declared = " ".join(x for x in (v.info.ros_kind, v.info.ros_name, v.info.ros_type) if x)
+        rows.append(
+            {
+                "name": markdown_cell(v.info.name),
+                "action": v.action,
+                "ros_name": v.ros_name,
+                "declared": markdown_cell(declared or "-"),
+            }
+        )
+    return render("rclpy/README.md.j2", **view, model_md=markdown_cell(model.name), behaviours=rows)
+
+
 def launch_entries(members: dict[str, str], composition: dict[str, int]) -> list[dict[str, Any]]:
+    """One entry per member of the composition: its kind, module, id and index."""
     entries = []
     for kind, module in members.items():
         for index in range(1, composition[kind] + 1):
@@ -429,53 +444,19 @@ def render_member(
     interfaces: str,
     common: dict[str, str],
 ) -> str:
+    """A member node module: the chart's code, its behaviours' actions and its parameters."""
     code = ChartRenderer(chart).render()
-    scopes = {e.ident: e.scope or "swarm" for e in chart.events}
-    what = f"member type {chart.member}" if chart.member else f"state machine {chart.machine}"
     behaviours = [views[b.name] for b in chart.behaviours]
     text = render(
         "rclpy/member.py.j2",
-        **common,
-        what=doc_text(what),
-        doc=doc_text(f"Behaviour of {what} (state machine {chart.machine}) as a ROS 2 node."),
-        chart_name=repr(chart.name),
-        member_type=repr(chart.member or chart.name),
-        machine=repr(chart.machine),
+        **member_view(chart, common, code, " as a ROS 2 node", chart.member or chart.name),
         node_name=repr(module),
         interfaces=repr(interfaces),
-        event_scopes=repr(scopes),
-        event_fields=event_fields_literal(chart),
         behaviours="{" + ", ".join(f"{v.info.name!r}: {v.spec()}" for v in behaviours) + "}",
         parameters="(" + "".join(f"{p}, " for p in member_parameters(model, chart, views)) + ")",
         notes=[f"{one_line(v.info.name)}: {one_line(v.note)}" for v in behaviours if v.note],
-        code=code,
     )
     return format_python(text)
-
-
-_IMPORTS = (
-    (re.compile(r"^from \.\.\.runtime\.(\w+) import", re.MULTILINE), r"from .._runtime.\1 import"),
-)
-
-
-def ros_runtime_files(folder: PurePosixPath) -> dict[PurePosixPath, str]:
-    """`swarmgen.ros.runtime` for the generated package: `...runtime` becomes `.._runtime`."""
-    files = {}
-    for module in ("__init__", *ROS_RUNTIME_MODULES):
-        text = (ROS_RUNTIME_DIR / f"{module}.py").read_text(encoding="utf-8")
-        for pattern, replacement in _IMPORTS:
-            text = pattern.sub(replacement, text)
-        header = (
-            f"# @generated by swarmgen {__version__}: a copy of swarmgen.ros.runtime.{module}."
-            " Do not edit.\n"
-        )
-        files[folder / f"{module}.py"] = header + text
-    return files
-
-
-def _md(text: str) -> str:
-    """Model names inside a Markdown table: no pipes, backticks or line breaks."""
-    return " ".join(one_line(text).replace("|", "/").replace("`", "'").split())
 
 
 def _xml(text: str) -> str:

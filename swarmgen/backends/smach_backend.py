@@ -5,32 +5,16 @@ runs it with the same engine. See docs/smach.md for the mapping."""
 
 from __future__ import annotations
 
-import ast
 import keyword
 from dataclasses import dataclass, field
-from pathlib import PurePosixPath
 
-from swarmgen import __version__
-from swarmgen.backends import Files
-from swarmgen.backends.asyncio_backend import (
-    RUNTIME_MODULES,
-    member_modules,
-    package_name,
-    support_files,
-)
-from swarmgen.backends.pyrender import (
-    ChartRenderer,
-    Function,
-    event_fields_literal,
-    format_python,
-    py_literal,
-)
+from swarmgen.backends.asyncio_backend import RUNTIME_MODULES
+from swarmgen.backends.pycommon import PackageBackend, member_view
+from swarmgen.backends.pyrender import ChartRenderer, Function, format_python, py_literal
 from swarmgen.chart import model as c
 from swarmgen.chart.model import Chart
 from swarmgen.ir import expr
-from swarmgen.ir.nodes import Model
-from swarmgen.ir.query import composition as swarm_composition
-from swarmgen.names import IdAllocator, doc_text, identifier, one_line, ros_name
+from swarmgen.names import IdAllocator, identifier, one_line, ros_name
 from swarmgen.render import render
 
 SMACH_RUNTIME = (*RUNTIME_MODULES, "smach")
@@ -78,6 +62,7 @@ class SmachRenderer(ChartRenderer):
             stack.extend((child, current.id) for child in current.children)
 
     def render_smach(self) -> SmachCode:
+        """The helper functions and the container factories, `build_state_machine` first."""
         top = Factory(TOP, "smach.StateMachine", one_line(f"member {self.chart.name}"))
         self.factories.append(top)
         finals = [n.id for n in self.chart.children if n.kind == "final"]
@@ -195,12 +180,7 @@ class SmachRenderer(ChartRenderer):
                 options.append(f"behaviour=smach.Behaviour({', '.join(behaviour)})")
             else:
                 options.extend(behaviour)
-        entry = self._action(node.onentry)
-        if entry:
-            options.append(f"onentry={entry}")
-        exit_ = self._action(node.onexit)
-        if exit_:
-            options.append(f"onexit={exit_}")
+        options.extend(self._hooks(node))
         if node.timers:
             options.append(f"timers={[(t.event, t.delay_ms) for t in node.timers]!r}")
         return options
@@ -242,16 +222,6 @@ class SmachRenderer(ChartRenderer):
 
     # --- transitions
 
-    def _cond(self, transition: c.Transition) -> str | None:
-        """The guard function; `bool(a < b)`, not `bool((a < b))` (ruff UP034)."""
-        parts = [f"ctx.is_active({s!r})" for s in transition.in_states]
-        if transition.cond is not None:
-            parts.append(self.py(transition.cond))
-        if not parts:
-            return None
-        text = " and ".join(parts)
-        return self._function("cond", [f"return bool({_unwrap(text)})"])
-
     def _transitions(self, node: c.Node) -> str:
         scope = self.parent[node.id]
         specs = []
@@ -259,17 +229,7 @@ class SmachRenderer(ChartRenderer):
         for transition in node.transitions:
             keys = self._keys(node, transition.events)
             targets = [self._target(scope, t) for t in transition.targets]
-            guard = self._cond(transition)
-            action = self._action(transition.actions)
-            options = []
-            if guard:
-                options.append(f"guard={guard}")
-            if action:
-                options.append(f"action={action}")
-            if transition.internal:
-                options.append("internal=True")
-            if transition.bounded:  # the step bound counts it (docs/semantics.md)
-                options.append("bounded=True")
+            options = self._transition_options(transition, "guard")
             plain = len(keys) == 1 and not keys[0].startswith("smach.")
             simple = simple and plain and len(targets) == 1 and not options
             specs.append((keys, targets, options))
@@ -337,65 +297,14 @@ class SmachRenderer(ChartRenderer):
         return "/" + "/".join(reversed(path))
 
 
-def _unwrap(text: str) -> str:
-    """`(a < b)` -> `a < b`: the outer parentheses go when they enclose the whole expression
-    (then the text without them is an expression too, token for token)."""
-    if text.startswith("(") and text.endswith(")"):
-        try:
-            ast.parse(text[1:-1], mode="eval")
-        except SyntaxError:
-            return text
-        return text[1:-1]
-    return text
-
-
-class SmachBackend:
-    name = "smach"
-
-    def render(self, model: Model, charts: tuple[Chart, ...]) -> Files:
-        if not charts:
-            return {}  # no state machine, nothing to run
-        package = PurePosixPath(package_name(model))
-        modules = member_modules(charts)
-        source = charts[0].source
-        common = {"version": __version__, "source": one_line(source), "runtime": "._runtime"}
-        files: Files = {}
-        for chart in charts:
-            files[package / f"{modules[chart.name]}.py"] = render_member(chart, common)
-        members = {c.member: modules[c.name] for c in charts if c.member}
-        composition = swarm_composition(model)
-        files[package / "__init__.py"] = format_python(
-            render(
-                "smach/package_init.py.j2",
-                **common,
-                model=doc_text(model.name),
-                package=str(package),
-                first_member=doc_text(next(iter(members), "")),
-                modules=sorted(modules.values()),
-                member_modules="{" + ", ".join(f"{k!r}: {v}" for k, v in members.items()) + "}",
-                composition=repr(composition),
-                exports=repr(["COMPOSITION", "MEMBER_TYPES", *sorted(modules.values())]),
-            )
-        )
-        files.update(support_files("smach", package, common, charts, SMACH_RUNTIME))
-        return files
-
-
 def render_member(chart: Chart, common: dict[str, str]) -> str:
+    """A member module: its SMACH container factories over the shared helper functions."""
     code = SmachRenderer(chart).render_smach()
-    scopes = {e.ident: e.scope or "swarm" for e in chart.events}
-    what = f"member type {chart.member}" if chart.member else f"state machine {chart.machine}"
-    text = render(
-        "smach/member.py.j2",
-        **common,
-        what=one_line(what),
-        what_doc=doc_text(what),
-        doc=doc_text(f"Behaviour of {what} (state machine {chart.machine}), built with SMACH."),
-        chart_name=repr(chart.name),
-        member_type=repr(chart.member),
-        machine=repr(chart.machine),
-        event_scopes=repr(scopes),
-        event_fields=event_fields_literal(chart),
-        code=code,
-    )
-    return format_python(text)
+    view = member_view(chart, common, code, ", built with SMACH", header_text=one_line)
+    return format_python(render("smach/member.py.j2", **view))
+
+
+class SmachBackend(PackageBackend):
+    name = "smach"
+    runtime_modules = SMACH_RUNTIME
+    member = staticmethod(render_member)

@@ -65,19 +65,12 @@ Instance = tuple[str, ...]  # ids of the submachine states that lead to a machin
 Key = tuple[Instance, str]  # one copy of one vertex
 
 
-_LAST: list[tuple[Model, tuple[c.Chart, ...]]] = []
-
-
 def lower(model: Model) -> tuple[c.Chart, ...]:
     """One chart per member type with a machine, then one per remaining top-level machine.
 
-    Memoised for the last model (the IR is immutable): the data-flow check and the outputs
-    lower the same model."""
-    if _LAST and _LAST[0][0] is model:
-        return _LAST[0][1]
-    charts = tuple(bound_cycles(chart) for chart in _lower(model))  # the step bound's marks
-    _LAST[:] = [(model, charts)]
-    return charts
+    The pipeline lowers a model once, after the model-level checks passed (`check.may_lower`),
+    and hands the charts to the chart-level checks and every output."""
+    return tuple(bound_cycles(chart) for chart in _lower(model))  # the step bound's marks
 
 
 def _lower(model: Model) -> tuple[c.Chart, ...]:

@@ -1,10 +1,11 @@
-"""Checks: one module per family of rules, each `Model -> list[Diagnostic]`, run in order."""
+"""Model-level checks: one module per family of rules, each `Model -> list[Diagnostic]`, run in
+order. Rules over the lowered charts run later, as their own stage (`swarmgen.chart.checks`)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
-from swarmgen.check.dataflow import check_dataflow
+from swarmgen import diagnostics as dg
 from swarmgen.check.determinism import check_determinism
 from swarmgen.check.events import check_events, check_unhandled_outcomes
 from swarmgen.check.expressions import check_expressions
@@ -47,7 +48,6 @@ RULES: tuple[Rule, ...] = (
     check_counts,
     check_ros_names,
     check_types,
-    check_dataflow,
 )
 
 
@@ -58,5 +58,13 @@ def run(model: Model) -> list[Diagnostic]:
         findings = rule(model)
         found.extend(findings)
         if rule is check_size and findings:
-            break  # the later rules would inline the machine (data flow lowers it)
+            break  # the later rules would walk the inlined machine; `may_lower` is then False
     return found
+
+
+def may_lower(found: Sequence[Diagnostic]) -> bool:
+    """Whether a model with these findings may be lowered: only one without errors, since lowering
+    assumes a well-formed model (SG143's initial transitions, SG104's cycles would break it), and
+    never one too large to inline (SG130), whatever its severity."""
+    too_large = any(d.code is dg.MODEL_TOO_LARGE for d in found)
+    return not too_large and not dg.has_errors(found)

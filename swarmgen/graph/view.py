@@ -12,6 +12,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
+from swarmgen.errors import SwarmgenError
 from swarmgen.ir import expr
 from swarmgen.ir import nodes as ir
 from swarmgen.ir.query import ModelIndex, connection_owner
@@ -25,7 +26,7 @@ TRIGGER_LIMIT = 40
 ACTIVITY_LIMIT = 48
 
 
-class GraphError(Exception):
+class GraphError(SwarmgenError):
     """The diagrams cannot be drawn as asked (an unknown member type, Graphviz missing)."""
 
 

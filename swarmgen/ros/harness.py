@@ -21,15 +21,16 @@ from typing import Any
 
 from swarmgen.backends.rclpy_backend import interfaces_package, member_modules, nodes_package
 from swarmgen.chart.model import Chart
+from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import Model
 from swarmgen.ros.interfaces import InterfaceBuildError, build_and_install
 
 
-class RosUnavailable(RuntimeError):
+class RosUnavailable(SwarmgenError, RuntimeError):
     """rclpy (the `ros` extra) is not installed, or the interfaces cannot be built."""
 
 
-class RosRunError(RuntimeError):
+class RosRunError(SwarmgenError, RuntimeError):
     """A ROS subprocess failed or timed out."""
 
 

@@ -39,6 +39,8 @@ from contextlib import contextmanager
 from pathlib import Path, PurePosixPath
 from xml.sax.saxutils import escape
 
+from swarmgen.errors import SwarmgenError
+
 __all__ = [
     "ACTIVE_STATES_MSG",
     "BUILD_STAMP",
@@ -115,7 +117,7 @@ _TYPES: dict[str, str] = {
 }
 
 
-class InterfaceBuildError(RuntimeError):
+class InterfaceBuildError(SwarmgenError, RuntimeError):
     """cmake failed to configure, build or install an interface package."""
 
 

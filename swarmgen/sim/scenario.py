@@ -31,6 +31,7 @@ from typing import Any
 
 from swarmgen import jsonfile
 from swarmgen.console import shown
+from swarmgen.errors import SwarmgenError
 
 SHIPPED = Path(__file__).resolve().parent / "scenarios"
 
@@ -50,8 +51,12 @@ ALLOCATIONS = ("paired", "nearest")
 STOPS = ("coverage", "rescued", "ticks")
 
 
-class ScenarioError(Exception):
+class ScenarioError(SwarmgenError):
     """A scenario file that cannot be used (a user error)."""
+
+
+class SimulationError(SwarmgenError):
+    """The model or scenario cannot be simulated (a user error)."""
 
 
 @dataclass(frozen=True)

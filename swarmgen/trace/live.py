@@ -30,7 +30,8 @@ from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
-from swarmgen.trace.bag import EVENTS_TOPIC, STATES_TOPIC, BagRecorder
+from swarmgen.trace.bag import EVENTS_TOPIC, STATES_TOPIC
+from swarmgen.trace.recorder import BagRecorder
 
 __all__ = ["LiveRecorder", "main"]
 

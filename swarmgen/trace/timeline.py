@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from swarmgen.trace.bag import Run
+from swarmgen.trace.reader import Run
 
 __all__ = [
     "PLOT_FORMATS",

@@ -1,4 +1,8 @@
-"""Data flow over each member's lowered statechart (submachines inlined):
+"""Chart-level checks: rules over the lowered statecharts, `(Model, [Chart]) -> [Diagnostic]`.
+
+They run as their own stage after `lower` (the pipeline calls `run`), on models the model-level
+checks (`swarmgen.check`) passed. Today one family, data flow over each member's chart
+(submachines inlined):
 
 - SG209: a behaviour reads member data (a bound expression, or an input read by name) that has no
   default and that some path from the start reaches the state without assigning; one such path
@@ -13,15 +17,15 @@ actions, initial transitions and behaviour outputs written back on outcomes.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
 from swarmgen.chart import model as c
-from swarmgen.chart.lower import lower
-from swarmgen.check.structure import check_submachines
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir import expr
-from swarmgen.ir.nodes import Model
+from swarmgen.ir.nodes import Model, State
+from swarmgen.ir.query import walk
 from swarmgen.span import Span
 
 
@@ -32,16 +36,28 @@ class _Edge:
     label: str
 
 
-def check_dataflow(model: Model) -> list[Diagnostic]:
-    if check_submachines(model):
-        return []  # a cyclic model cannot be lowered; SG104 says why
-    try:
-        charts = lower(model)
-    except (KeyError, ValueError, RecursionError):
-        return []  # structural errors reported by other checks
+ChartRule = Callable[[Model, Sequence[c.Chart]], list[Diagnostic]]
+
+
+def check_dataflow(model: Model, charts: Sequence[c.Chart]) -> list[Diagnostic]:
+    """SG209 and SG210 over every lowered chart of the model."""
     found: list[Diagnostic] = []
     for chart in charts:
         found += _chart(model, chart)
+    return found
+
+
+CHART_RULES: tuple[ChartRule, ...] = (check_dataflow,)
+
+
+def run(model: Model, charts: Sequence[c.Chart]) -> list[Diagnostic]:
+    """Every chart-level rule's findings, in rule order (the pipeline sorts them by position).
+
+    Only a model the model-level checks passed is lowered (`swarmgen.check.may_lower`), so these
+    rules see well-formed charts."""
+    found: list[Diagnostic] = []
+    for rule in CHART_RULES:
+        found += rule(model, charts)
     return found
 
 
@@ -135,9 +151,6 @@ def _outputs_written(owner: c.Node, transition: c.Transition) -> set[str]:
 
 
 def _spans(model: Model) -> dict[str, Span]:
-    from swarmgen.ir.nodes import State
-    from swarmgen.ir.query import walk
-
     return {
         p.vertex.name: p.vertex.span
         for m in model.machines

@@ -1,0 +1,224 @@
+"""What building shares: the raw model, diagnostics, stereotypes and reference resolution."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from swarmgen import diagnostics as dg
+from swarmgen.diagnostics import Diagnostic
+from swarmgen.frontend.raw import RawElement, RawModel, StereotypeApplication
+from swarmgen.ir.literals import (
+    BadLiteral,
+    literal_text,
+    literal_value,
+    unrepresentable,
+)
+from swarmgen.ir.nodes import (
+    Behaviour,
+    BehaviourKind,
+    Event,
+    HardwareKind,
+    Property,
+    Value,
+)
+from swarmgen.names import identifier
+from swarmgen.span import Span
+
+HARDWARE_KINDS = {k.value: k for k in HardwareKind}
+BEHAVIOUR_KINDS = {k.value: k for k in BehaviourKind}
+_BEHAVIOUR_TAGS = frozenset({"requires", "outcomes", "emits", "rosKind", "rosName", "rosType"})
+KNOWN_STEREOTYPES: dict[str, frozenset[str]] = {
+    "Swarm": frozenset(),
+    "SwarmMember": frozenset({"role"}),
+    "Sensor": frozenset(),
+    "Actuator": frozenset(),
+    "Controller": frozenset(),
+    "CommunicationInterface": frozenset({"communicationType", "communicationParams"}),
+    "BehaviorLibrary": frozenset(),
+    "SwarmEvent": frozenset({"sender", "scope"}),
+    **{k: _BEHAVIOUR_TAGS for k in BEHAVIOUR_KINDS},
+}
+
+
+@dataclass
+class Builder:
+    """The state of one build: the raw model, the diagnostics so far, stereotypes by base id,
+    and the behaviours and events read so far (which later stages resolve against)."""
+
+    raw: RawModel
+    diags: list[Diagnostic] = field(default_factory=list)
+    stereo: dict[str, list[StereotypeApplication]] = field(default_factory=dict)
+    behaviours: dict[str, Behaviour] = field(default_factory=dict)
+    events_by_signal: dict[str, Event] = field(default_factory=dict)
+    events_by_name: dict[str, Event] = field(default_factory=dict)
+
+    # --- helpers
+
+    def report(self, code: dg.Code, message: str, span: Span, hint: str | None = None) -> None:
+        self.diags.append(dg.diag(code, message, span, hint=hint))
+
+    def stereotype(self, element: RawElement, names: Iterable[str]) -> StereotypeApplication | None:
+        wanted = set(names)
+        apps = [a for a in self.stereo.get(element.id or "", []) if a.name in wanted]
+        return apps[0] if apps else None
+
+    def ref(
+        self, element: RawElement, feature: str, kinds: set[str] | None = None
+    ) -> RawElement | None:
+        """Resolve a single-valued reference, reporting dangling and wrong-kind references,
+        and several values where UML allows one (`source="_a _b"` used to take `_a`)."""
+        values = element.ref_values(feature)
+        if len(values) > 1:
+            self.several(element, feature, values)
+            return None
+        return self._resolve(element, feature, values[0], kinds) if values else None
+
+    def several(self, element: RawElement, feature: str, values: list[str]) -> None:
+        shown = " ".join(values[:3]) + (" ..." if len(values) > 3 else "")
+        self.report(
+            dg.SEVERAL_REFS,
+            f"{element.uml_type or element.feature} {label(element)}: {feature} names "
+            f"{len(values)} elements ({shown}); it takes exactly one",
+            element.span,
+            hint=f"keep one id in {feature}",
+        )
+
+    def refs(
+        self, element: RawElement, feature: str, kinds: set[str] | None = None
+    ) -> list[RawElement]:
+        found = (self._resolve(element, feature, v, kinds) for v in element.ref_values(feature))
+        return [f for f in found if f is not None]
+
+    def _resolve(
+        self, element: RawElement, feature: str, value: str, kinds: set[str] | None
+    ) -> RawElement | None:
+        target = self.raw.resolve(value)
+        if target is None:
+            if _is_external(value):
+                return None
+            self.report(
+                dg.DANGLING_REF,
+                f"{element.uml_type or element.feature} '{element.name}': {feature} '{value}' "
+                "names no element of the model",
+                element.span,
+                hint="the referenced element was deleted or lives in a file that was not exported",
+            )
+            return None
+        if kinds is not None and target.uml_type not in kinds:
+            self.report(
+                dg.WRONG_REF_KIND,
+                f"{feature} of '{element.name}' is a {target.uml_type or target.feature} "
+                f"'{target.name}', expected {' or '.join(sorted(kinds))}",
+                element.span,
+            )
+            return None
+        return target
+
+    def type_name(self, element: RawElement) -> str | None:
+        values = element.ref_values("type")
+        if len(values) > 1:
+            self.several(element, "type", values)
+            return None
+        for value in values:
+            target = self.raw.resolve(value)
+            if target is not None:
+                return target.name or None
+            # pathmap://.../UMLPrimitiveTypes.library.uml#Real, OMG uml.xml#Integer
+            if "#" in value:
+                return value.rsplit("#", 1)[1] or None
+            self._resolve(element, "type", value, None)  # reports the dangling reference
+        return None
+
+    def prop(self, element: RawElement) -> Property:
+        type_name = self.type_name(element)
+        return Property(
+            id=element.id or element.span.path,
+            name=element.name,
+            ident=identifier(element.name),
+            type=type_name,
+            default=self._default(element, type_name),
+            span=element.span,
+        )
+
+    def _default(self, element: RawElement, type_name: str | None) -> Value:
+        """The default, if generated code can hold it exactly and it is of the declared type
+        (an Integer `abc` or `1e3` used to become a string literal, a Boolean `yes` false)."""
+        spec = element.first("defaultValue")
+        if spec is None:
+            return None
+        value = literal_value(spec)
+        if not isinstance(value, BadLiteral):
+            bad = unrepresentable(value, type_name)
+            if bad is None:
+                return value
+            value = bad
+        self.report(
+            dg.BAD_DEFAULT,
+            f"default value {short(literal_text(spec))} of '{element.name}' {value.problem}",
+            element.span,
+            hint=value.hint,
+        )
+        return None
+
+    # --- stereotypes
+
+    def index_stereotypes(self) -> None:
+        for app in self.raw.stereotypes:
+            known = KNOWN_STEREOTYPES.get(app.name)
+            if known is None:
+                self.report(
+                    dg.UNKNOWN_STEREOTYPE,
+                    f"stereotype '{app.name}' is not part of the swarm profile; ignored",
+                    app.span,
+                )
+                continue
+            for tag in sorted(set(app.tags) - known):
+                self.report(dg.UNKNOWN_TAG, f"«{app.name}» has no tag '{tag}'; ignored", app.span)
+            for base in app.base_ids:
+                if self.raw.resolve(base) is None:
+                    self.report(
+                        dg.DANGLING_REF,
+                        f"«{app.name}» is applied to '{base}', which names no element",
+                        app.span,
+                    )
+                self.stereo.setdefault(base, []).append(app)
+
+    def tag_choice(
+        self, app: StereotypeApplication, tag: str, allowed: tuple[str, ...]
+    ) -> str | None:
+        value = app.tags.get(tag, "").strip()
+        if not value:
+            return None
+        if value not in allowed:
+            self.report(
+                dg.BAD_TAG_VALUE,
+                f"«{app.name}» {tag}='{value}' is not one of {', '.join(allowed)}",
+                app.span,
+            )
+            return None
+        return value
+
+
+def label(element: RawElement) -> str:
+    """How a message names an element: by name, else (transitions rarely have one) by id."""
+    return f"'{element.name}'" if element.name else (element.id or element.span.path)
+
+
+def _is_external(value: str) -> bool:
+    """hrefs into other files (profiles, UML libraries) are not ours to resolve."""
+    if "#" not in value:
+        return False
+    file_part = value.split("#", 1)[0]
+    return bool(file_part)
+
+
+def is_part(attribute: RawElement) -> bool:
+    """Whether the attribute is a composite part (hardware of a member, members of a swarm)."""
+    return attribute.attrs.get("aggregation") == "composite"
+
+
+def short(text: str, limit: int = 60) -> str:
+    """Model text quoted for a message: whitespace collapsed, clipped at `limit`."""
+    flat = " ".join(text.split())
+    return f"'{flat[: limit - 3]}...'" if len(flat) > limit else f"'{flat}'"

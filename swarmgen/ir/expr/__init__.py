@@ -1,0 +1,80 @@
+"""The expression and action language of guards, effects and behaviour argument bindings.
+
+Guards are side-effect-free expressions (literals, member data names, ``event.<field>``,
+comparisons, ``and``/``or``/``not``, arithmetic). Effects are one action per line:
+``raise <event>(field = expr, ...)``, ``send <event>(field = expr, ...)`` or
+``name = expression``. Bindings are one ``name = expression`` per line.
+
+Model text is hostile input: it is parsed by a hand-written tokenizer and a precedence-climbing
+parser (never ``eval`` nor Python's ``ast``), every identifier in the tree is validated, and the
+renderers quote strings with the target language's own escaping, so neither a name nor a string
+can inject code into the generated ECMAScript or Python.
+
+The package's public face, used as ``from swarmgen.ir import expr`` then ``expr.parse_expr``,
+``expr.Binary``, ``expr.to_ecmascript``: the tree and its queries (``tree``), syntax errors
+(``errors``), the tokenizer (``lex``), the parser (``parse``) and the renderings (``render``).
+Modules of the package import one another directly, never through this file.
+"""
+
+from swarmgen.ir.expr.errors import ExprError
+from swarmgen.ir.expr.parse import parse_actions, parse_bindings, parse_expr
+from swarmgen.ir.expr.render import js_string, to_ecmascript, to_python, to_text
+from swarmgen.ir.expr.tree import (
+    MAX_DEPTH,
+    MAX_INT,
+    MAX_TEXT,
+    RESERVED,
+    Action,
+    Arg,
+    Assign,
+    Attr,
+    Binary,
+    Binding,
+    Const,
+    Else,
+    EventField,
+    Expr,
+    Name,
+    Raise,
+    Send,
+    Unary,
+    Value,
+    event_fields,
+    free_names,
+    replace_fields,
+    walk,
+)
+
+__all__ = [
+    "MAX_DEPTH",
+    "MAX_INT",
+    "MAX_TEXT",
+    "RESERVED",
+    "Action",
+    "Arg",
+    "Assign",
+    "Attr",
+    "Binary",
+    "Binding",
+    "Const",
+    "Else",
+    "EventField",
+    "Expr",
+    "ExprError",
+    "Name",
+    "Raise",
+    "Send",
+    "Unary",
+    "Value",
+    "event_fields",
+    "free_names",
+    "js_string",
+    "parse_actions",
+    "parse_bindings",
+    "parse_expr",
+    "replace_fields",
+    "to_ecmascript",
+    "to_python",
+    "to_text",
+    "walk",
+]

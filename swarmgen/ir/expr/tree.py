@@ -1,0 +1,236 @@
+"""The expression language's tree: limits, operator precedence, nodes, and queries over them."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from typing import Annotated, Literal
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator
+
+MAX_TEXT = 10_000
+MAX_DEPTH = 100
+# ECMAScript numbers are doubles: larger integers would silently change value in the SCXML.
+MAX_INT = 2**53 - 1
+
+RESERVED = frozenset(
+    {"and", "or", "not", "true", "false", "True", "False", "null", "None", "else", "event"}
+)
+
+BinOp = Literal["or", "and", "==", "!=", "<", "<=", ">", ">=", "+", "-", "*", "/", "%"]
+UnOp = Literal["not", "-", "+"]
+Value = bool | int | float | str | None
+
+# --- operator precedence (the parser's and the canonical text's)
+
+PREC: dict[BinOp, int] = {
+    "or": 1, "and": 2,
+    "==": 4, "!=": 4, "<": 4, "<=": 4, ">": 4, ">=": 4,
+    "+": 5, "-": 5, "*": 6, "/": 6, "%": 6,
+}  # fmt: skip
+NOT_PREC = 3  # prefix `not` sits between `and` and the comparisons, as in Python
+UNARY_PREC = 7
+ATOM_PREC = 9
+COMPARISONS = frozenset({"==", "!=", "<", "<=", ">", ">="})
+
+
+# --- tree
+
+
+def _ident(value: str) -> str:
+    if not value.isidentifier():
+        raise ValueError(f"{value!r} is not an identifier")
+    # Dunder names reach interpreter internals (__class__, __proto__): keep them out entirely.
+    if value.startswith("__"):
+        raise ValueError(f"{value!r}: names starting with '__' are reserved")
+    return value
+
+
+def _data_name(value: str) -> str:
+    if value in RESERVED:
+        raise ValueError(f"{value!r} is a keyword of the expression language")
+    return _ident(value)
+
+
+Ident = Annotated[str, AfterValidator(_ident)]
+DataName = Annotated[str, AfterValidator(_data_name)]
+
+
+def _check_value(value: Value) -> Value:
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError("numbers must be finite")
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) > MAX_INT:
+        raise ValueError(f"integers must lie within ±{MAX_INT}")
+    if isinstance(value, str) and any(0xD800 <= ord(c) <= 0xDFFF for c in value):
+        raise ValueError("strings must not contain lone surrogates")
+    return value
+
+
+def _not_else(value: Expr) -> Expr:
+    if isinstance(value, Else):
+        raise ValueError("`else` can only be a whole guard")
+    return value
+
+
+def _path(value: Expr) -> Expr:
+    if not isinstance(value, Name | EventField | Attr):
+        raise ValueError("attribute access needs a name on the left")
+    return value
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class Const(_Model):
+    """A literal: boolean, integer, float, string or null."""
+
+    kind: Literal["literal"] = "literal"
+    value: Value
+
+    @field_validator("value")
+    @classmethod
+    def check_value(cls, value: Value) -> Value:
+        return _check_value(value)
+
+
+class Name(_Model):
+    """A member data name."""
+
+    kind: Literal["name"] = "name"
+    name: DataName
+
+
+class EventField(_Model):
+    """``event.<field>``: a field of the event that triggered the transition."""
+
+    kind: Literal["event_field"] = "event_field"
+    field: Ident
+
+
+class Attr(_Model):
+    """``obj.name`` where obj is a name, an event field or another attribute access."""
+
+    kind: Literal["attr"] = "attr"
+    obj: Annotated[Expr, AfterValidator(_path)]
+    name: Ident
+
+
+class Unary(_Model):
+    kind: Literal["unary"] = "unary"
+    op: UnOp
+    operand: Operand
+
+
+class Binary(_Model):
+    kind: Literal["binary"] = "binary"
+    op: BinOp
+    left: Operand
+    right: Operand
+
+
+class Else(_Model):
+    """UML's ``else`` guard: true when no other guard of the choice holds."""
+
+    kind: Literal["else"] = "else"
+
+
+Expr = Annotated[
+    Const | Name | EventField | Attr | Unary | Binary | Else, Field(discriminator="kind")
+]
+Operand = Annotated[Expr, AfterValidator(_not_else)]
+
+for _cls in (Attr, Unary, Binary):
+    _cls.model_rebuild()
+
+
+class Arg(_Model):
+    """``field = expr`` inside ``raise``/``send``."""
+
+    name: Ident
+    value: Operand
+
+
+def _unique_args(args: tuple[Arg, ...]) -> tuple[Arg, ...]:
+    names = [a.name for a in args]
+    if len(set(names)) != len(names):
+        raise ValueError("duplicate argument names")
+    return args
+
+
+class Assign(_Model):
+    kind: Literal["assign"] = "assign"
+    target: DataName
+    value: Operand
+
+
+class Raise(_Model):
+    """Raise an event for this member only."""
+
+    kind: Literal["raise"] = "raise"
+    event: Ident
+    args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
+
+
+class Send(_Model):
+    """Send an event to the swarm."""
+
+    kind: Literal["send"] = "send"
+    event: Ident
+    args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
+
+
+Action = Annotated[Assign | Raise | Send, Field(discriminator="kind")]
+
+
+class Binding(_Model):
+    """``name = expr``: one argument binding of a behaviour call."""
+
+    name: DataName
+    value: Operand
+
+
+# --- queries
+
+
+def _children(e: Expr) -> tuple[Expr, ...]:
+    if isinstance(e, Attr):
+        return (e.obj,)
+    if isinstance(e, Unary):
+        return (e.operand,)
+    if isinstance(e, Binary):
+        return (e.left, e.right)
+    return ()
+
+
+def walk(expr: Expr) -> Iterator[Expr]:
+    """All nodes of the tree, pre-order, left to right (iterative: no recursion limit)."""
+    stack: list[Expr] = [expr]
+    while stack:
+        node = stack.pop()
+        yield node
+        stack.extend(reversed(_children(node)))
+
+
+def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
+    """`event.<f>` read as the member datum `names[f]` instead (depth is bounded by the parser)."""
+    if isinstance(expr, EventField) and expr.field in names:
+        return Name(name=names[expr.field])
+    if isinstance(expr, Attr):
+        return Attr(obj=replace_fields(expr.obj, names), name=expr.name)
+    if isinstance(expr, Unary):
+        return Unary(op=expr.op, operand=replace_fields(expr.operand, names))
+    if isinstance(expr, Binary):
+        left, right = replace_fields(expr.left, names), replace_fields(expr.right, names)
+        return Binary(op=expr.op, left=left, right=right)
+    return expr
+
+
+def free_names(expr: Expr) -> frozenset[str]:
+    """Member data names read by the expression (the root of `a.b` is `a`; no event fields)."""
+    return frozenset(n.name for n in walk(expr) if isinstance(n, Name))
+
+
+def event_fields(expr: Expr) -> frozenset[str]:
+    """Fields of the triggering event read by the expression."""
+    return frozenset(n.field for n in walk(expr) if isinstance(n, EventField))

@@ -1,0 +1,431 @@
+"""A batch: repetitions of one configuration simulated together, the engines' discrete-time host.
+
+Each member of each repetition is a `SimMember`: `swarmgen.runtime.member.Member` (the class the
+generated asyncio code runs) whose engine is built from the chart the asyncio backend generates
+for its member type, attached to the run's `InMemoryBus`. Only the host services differ: instead
+of asyncio tasks and `call_later`, a `Batch` keeps one clock per run and a schedule of what is
+due, and advances time in rounds:
+
+1. at its current tick each run handles the finds made there, the scheduled items that are due
+   (station events, behaviour completions, timers) and then every queued event, one engine
+   macrostep each, until nothing is queued (behaviours started or cancelled on the way);
+2. each run's horizon is its next scheduled tick (or a chunk of ticks when nothing is due);
+3. the world moves every covering member of every run to its horizon at once (numpy), stopping
+   a run early at the first tick one of its members has an unfound target in view.
+
+Repetitions of one configuration share a batch (the leading axis of every world array);
+configurations and chunks of repetitions are spread over processes (`swarmgen.sim.sweep`). A run's
+random numbers depend only on (seed, configuration, repetition), so results do not depend on
+`--workers`.
+
+With `record` (`swarmgen simulate --record DIR`), each run writes a ROS 2 bag,
+`DIR/<configuration>-<rep>` (see `Config.slug`), in the process that simulates it: every event
+every member processes and every change of its active states, stamped with the run's tick
+(`tick * tick_ms` ms since the start, launch being tick 0 in the shipped scenarios).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import math
+from collections import deque
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from swarmgen.runtime.chart import Call, Node
+from swarmgen.runtime.engine import FINALIZE_PREFIX, Event
+from swarmgen.runtime.member import InMemoryBus, Request
+from swarmgen.sim.library import Activation, Library, SimBehaviour, claims, found
+from swarmgen.sim.machines import Machines, MemberMachine, build_chart, waited_outcomes
+from swarmgen.sim.member import SimMember
+from swarmgen.sim.scenario import Scenario, SimulationError
+from swarmgen.sim.world import FOUND, INF, RESCUED, Geometry, World, fan_headings, south_line
+
+if TYPE_CHECKING:
+    from swarmgen.trace.recorder import BagRecorder
+
+POINTS_PER_ROUND = 1_000_000  # positions computed per round at most (memory bound)
+MIN_CHUNK = 256
+EVENTS_PER_TICK = 200_000  # more events than this in one tick of one run: a livelock
+
+# --- results ----------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Config:
+    counts: tuple[tuple[str, int], ...]  # (member type, count) in model order
+    targets: int
+
+    def label(self) -> str:
+        parts = [f"{k}={v}" for k, v in self.counts]
+        return " ".join([*parts, f"targets={self.targets}"])
+
+    def slug(self) -> str:
+        """A directory name: `UAV2_UGV2_targets4`."""
+        return "_".join([*(f"{k}{v}" for k, v in self.counts), f"targets{self.targets}"])
+
+    def seed_key(self) -> list[int]:
+        return [self.targets, *(count for _, count in self.counts)]
+
+
+@dataclass
+class RunResult:
+    config: int  # index into the sweep's configurations
+    rep: int
+    end_tick: int
+    reason: str  # "coverage", "rescued", "ticks" (the stop conditions), "max_ticks", "stalled"
+    coverage: list[int | None]  # time to each coverage level (None: not reached)
+    coverage_final: float  # share of patches seen at the end
+    found: list[int | None]  # per target: time it was found (reported and taken up)
+    rescued: list[int | None]  # per target: time it was rescued
+    events: int  # events processed by the engines
+    errors: list[str] = field(default_factory=list)
+
+
+# --- a batch of runs --------------------------------------------------------------------------
+
+
+class Batch:
+    """Repetitions of one configuration, simulated together; the engines' host."""
+
+    def __init__(
+        self,
+        machines: Machines,
+        scenario: Scenario,
+        config: Config,
+        reps: Sequence[int],
+        *,
+        record: Path | None = None,
+        storage: str = "mcap",
+    ) -> None:
+        self.scenario = scenario
+        self.record = record  # a directory: one bag per run, written by `run_all`
+        self.storage = storage
+        self.recorders: list[BagRecorder] = []
+        self.config = config
+        self.reps = list(reps)
+        runs = len(self.reps)
+        self.geometry = Geometry(scenario.width, scenario.height, scenario.view)
+        counts = dict(config.counts)
+        kinds = [m for m in machines.members if counts.get(m.member_type, 0) > 0]
+        self._outputs: dict[str, tuple[tuple[str, str | None], ...]] = {}
+        self.scopes: dict[str, str] = {}
+        for m in machines.members:
+            self._outputs.update(m.outputs)
+            self.scopes.update(m.scopes)
+        self.world = self._world(kinds, counts)
+        self.library = Library(scenario.library)
+        self.t: list[int] = [0] * runs
+        self.pending: list[deque[tuple[SimMember, Event]]] = [deque() for _ in range(runs)]
+        self.schedule: list[list[tuple[int, int, Callable[[], None]]]] = [[] for _ in range(runs)]
+        self._seq = itertools.count()
+        self.finds: dict[int, list[tuple[int, int, int]]] = {}  # run -> (member, x, y)
+        self.events = [0] * runs
+        self.members: list[SimMember] = []
+        self.waited: dict[str, dict[str, frozenset[str]]] = {}
+        self.buses: list[InMemoryBus] = []
+        layout = [(m, i + 1) for m in kinds for i in range(counts[m.member_type])]
+        for run in range(runs):
+            self._populate(run, layout)
+        self.origin = scenario.origin_tick()
+        self.done: list[str | None] = [None] * runs
+
+    def _world(self, kinds: list[MemberMachine], counts: dict[str, int]) -> World:
+        """Every run's world: the members in a line along the south edge, targets drawn per run."""
+        scenario, geo = self.scenario, self.geometry
+        xs, ys, heads = [], [], []
+        for m in kinds:
+            n = counts[m.member_type]
+            place = scenario.placement_of(m.member_type)
+            x, y = south_line(n, geo, place.spacing)
+            xs.append(x)
+            ys.append(y)
+            heads.append(fan_headings(n) if place.headings == "fan" else np.full(n, math.pi / 2))
+        keys, targets = [], []
+        for rep in self.reps:
+            seq = np.random.SeedSequence([scenario.seed, *self.config.seed_key(), rep])
+            turns, places = seq.spawn(2)
+            keys.append(turns.generate_state(1, np.uint64)[0])
+            targets.append(self._targets(np.random.default_rng(places)))
+        empty = np.zeros(0)
+        return World(
+            geo,
+            np.array(keys, dtype=np.uint64),
+            np.concatenate(xs) if xs else empty,
+            np.concatenate(ys) if ys else empty,
+            np.concatenate(heads) if heads else empty,
+            np.array(targets, dtype=np.int64).reshape(len(self.reps), self.config.targets, 2),
+        )
+
+    def _populate(self, run: int, layout: list[tuple[MemberMachine, int]]) -> None:
+        """The members of one run on its own bus, and the station's events in its schedule."""
+        bus = InMemoryBus()
+        self.buses.append(bus)
+        for m, index in layout:
+            chart, scopes = build_chart(m)
+            if m.chart_name not in self.waited:
+                self.waited[m.chart_name] = waited_outcomes(chart)
+            self.members.append(
+                SimMember(
+                    self,
+                    run,
+                    len(self.members),
+                    chart,
+                    m.member_type,
+                    index,
+                    bus,
+                    scopes,
+                    m.chart_name,
+                )
+            )
+        for item in self.scenario.station:
+            self.at(run, item.tick, self._broadcast(bus, item.event, item.data))
+
+    def _targets(self, rng: np.random.Generator) -> list[tuple[int, int]]:
+        s = self.scenario
+        if s.target_positions is not None:
+            return list(s.target_positions)
+        count = min(self.config.targets, s.width * s.height)
+        cells = rng.choice(s.width * s.height, size=count, replace=False)
+        return [(int(c % s.width), int(c // s.width)) for c in cells]
+
+    @staticmethod
+    def _broadcast(
+        bus: InMemoryBus, event: str, data: Mapping[str, Any] | None
+    ) -> Callable[[], None]:
+        return lambda: bus.broadcast(event, data)
+
+    # --- the host services (swarmgen.sim.library.Host)
+
+    def now(self, run: int) -> int:
+        return self.t[run]
+
+    def at(self, run: int, tick: int, then: Callable[[], None]) -> None:
+        heapq.heappush(self.schedule[run], (tick, next(self._seq), then))
+
+    def after(self, act: Activation, ticks: int, then: Callable[[], None]) -> None:
+        if ticks <= 0:
+            then()
+            return
+
+        def due() -> None:
+            if not act.done:
+                then()
+
+        self.at(act.run, self.t[act.run] + ticks, due)
+
+    def finish(self, act: Activation, outcome: str, outputs: Mapping[str, Any] | None) -> None:
+        """The behaviour ends: its outcome event goes to the member (the engine drops it if
+        the state was left meanwhile, as with asyncio tasks)."""
+        if act.done:
+            return
+        self.end(act)
+        member = self.members[act.g]
+        member.deliver(
+            member.engine.make_event(
+                f"{FINALIZE_PREFIX}{act.node_id}.{outcome}",
+                dict(outputs or {}),
+                member.member_id,
+                origin=(act.node_id, act.number),
+            )
+        )
+
+    def end(self, act: Activation) -> None:
+        if act.done:
+            return
+        act.done = True
+        member = self.members[act.g]
+        if member.live.get(act.node_id) is act:
+            del member.live[act.node_id]
+        act.impl.stop(self, act)
+
+    def emit(self, act: Activation, event: str, data: Mapping[str, Any]) -> None:
+        act.request.emit(event, data, self.scopes.get(event, "swarm"))
+
+    def outputs_of(self, behaviour: str) -> tuple[tuple[str, str | None], ...]:
+        return self._outputs.get(behaviour, ())
+
+    def activation_of(self, g: int, impl: SimBehaviour) -> Activation | None:
+        for act in self.members[g].live.values():
+            if act.impl is impl:
+                return act
+        return None
+
+    def start_call(
+        self, member: SimMember, node: Node, call: Call, args: dict[str, Any], activation: int
+    ) -> None:
+        impl = self.library.get(call.behaviour)
+        request = Request(
+            member.member_type,
+            member.member_id,
+            node.id,
+            call.behaviour,
+            args,
+            member._emit,
+            member.engine.data,
+        )
+        act = Activation(
+            member.g,
+            member.rank,
+            node.id,
+            activation,
+            call.behaviour,
+            request,
+            self.waited[member.chart_name].get(node.id, frozenset()),
+            self.t[member.rank],
+            impl,
+        )
+        old = member.live.get(node.id)
+        if old is not None:
+            self.end(old)
+        member.live[node.id] = act
+        claims(self.world, member.rank, member.g, args)
+        impl.start(self, act)
+
+    # --- time
+
+    def run_all(self) -> list[RunResult]:
+        if self.record is None:
+            return self._run_all()
+        from swarmgen.trace.recorder import BagRecorder, VirtualClock
+
+        try:
+            for rep in self.reps:
+                path = self.record / f"{self.config.slug()}-{rep:04d}"
+                self.recorders.append(BagRecorder(path, storage=self.storage, clock=VirtualClock()))
+            return self._run_all()
+        finally:
+            for recorder in self.recorders:
+                recorder.close()
+
+    def _run_all(self) -> list[RunResult]:
+        runs = len(self.reps)
+        for member in self.members:
+            member.engine.start()
+            if self.recorders:
+                self.recorders[member.rank].step(member, None, stamp_ns=0)
+        for run in range(runs):
+            self._drain(run)
+        active = list(range(runs))
+        while active:
+            for run in active:
+                self._process(run)
+                self._check(run)
+            active = [r for r in active if self.done[r] is None]
+            if not active:
+                break
+            per = self.world.per_run
+            movers = sum(int(self.world.moving[r * per : (r + 1) * per].sum()) for r in active)
+            cap = max(MIN_CHUNK, POINTS_PER_ROUND // max(1, movers))
+            now = np.array(self.t, dtype=np.int64)
+            horizon = now.copy()
+            for run in active:
+                t = self.t[run]
+                schedule = self.schedule[run]
+                due = schedule[0][0] if schedule else INF
+                chunk = min(cap, max(MIN_CHUNK, (t - self.origin) // 8))
+                horizon[run] = max(t, min(due, t + chunk, self.scenario.max_ticks))
+            end, finds = self.world.advance(now, horizon)
+            for run, g, ix, iy in finds:
+                self.finds.setdefault(run, []).append((g, ix, iy))
+            for run in active:
+                self.t[run] = int(end[run])
+        return [self._result(run) for run in range(runs)]
+
+    def _moving(self, run: int) -> bool:
+        per = self.world.per_run
+        return bool(self.world.moving[run * per : (run + 1) * per].any())
+
+    def _process(self, run: int) -> None:
+        t = self.t[run]
+        for g, ix, iy in self.finds.pop(run, []):
+            targets = self.world.targets_in_view(g, ix, iy)
+            if targets:
+                found(self, run, g, targets)
+        schedule = self.schedule[run]
+        while schedule and schedule[0][0] <= t:
+            heapq.heappop(schedule)[2]()
+            self._drain(run)
+        self._drain(run)
+        fresh = self.world.fresh[run]
+        for target in fresh:  # finds nobody took up are forgotten
+            if self.world.status[run, target] == FOUND:
+                self.world.forget(run, target)
+        fresh.clear()
+
+    def _drain(self, run: int) -> None:
+        queue = self.pending[run]
+        recorder = self.recorders[run] if self.recorders else None
+        count = 0
+        while queue:
+            member, event = queue.popleft()
+            member.engine.send(event)
+            if recorder is not None:
+                stamp = self.t[run] * self.scenario.timing["tick_ms"] * 1_000_000
+                recorder.step(member, event, stamp_ns=stamp)
+            count += 1
+            if count > EVENTS_PER_TICK:
+                raise SimulationError(
+                    f"run {self.reps[run]} of {self.config.label()}: more than "
+                    f"{EVENTS_PER_TICK} events at tick {self.t[run]} (a livelock in the model?)"
+                )
+        self.events[run] += count
+
+    def _check(self, run: int) -> None:
+        if self.done[run] is not None:
+            return
+        s = self.scenario
+        if s.stop == "coverage":
+            need = max(1, math.ceil(s.stop_level * self.geometry.cells - 1e-9))
+            if self.world.covered[run] >= need:
+                self.done[run] = "coverage"
+        elif s.stop == "rescued":
+            status = self.world.status[run]
+            need = math.ceil(s.stop_level * len(status) - 1e-9)
+            if int((status == RESCUED).sum()) >= need and self.t[run] >= self.origin:
+                self.done[run] = "rescued"
+        if self.done[run] is None:
+            if self.t[run] >= s.max_ticks:
+                self.done[run] = "ticks" if s.stop == "ticks" else "max_ticks"
+            elif not self.schedule[run] and not self._moving(run):
+                self.done[run] = "stalled"  # nothing will ever happen again
+        if self.done[run] is not None:
+            per = self.world.per_run
+            self.world.moving[run * per : (run + 1) * per] = False
+
+    def _result(self, run: int) -> RunResult:
+        w = self.world
+        seen = np.sort(w.seen_times(run).reshape(-1))
+        cells = len(seen)
+        coverage: list[int | None] = []
+        for level in self.scenario.coverage_levels:
+            need = max(1, math.ceil(level * cells - 1e-9))
+            value = int(seen[need - 1])
+            coverage.append(None if value == INF else value - self.origin)
+        errors = [
+            e for m in self.members[run * w.per_run : (run + 1) * w.per_run] for e in m.errors
+        ]
+
+        def times(ticks: np.ndarray) -> list[int | None]:
+            return [None if v < 0 else int(v) - self.origin for v in ticks.tolist()]
+
+        end = self.t[run]
+        if self.done[run] == "coverage":  # rounds may overshoot: the tick it was reached
+            end = int(seen[max(1, math.ceil(self.scenario.stop_level * cells - 1e-9)) - 1])
+        return RunResult(
+            config=-1,
+            rep=self.reps[run],
+            end_tick=end,
+            reason=self.done[run] or "stalled",
+            coverage=coverage,
+            coverage_final=float(np.count_nonzero(seen != INF)) / cells,
+            found=times(w.found_tick[run]),
+            rescued=times(w.rescued_tick[run]),
+            events=self.events[run],
+            errors=errors[:20],
+        )

@@ -1,0 +1,94 @@
+"""The compiled machines the simulator runs: each member type's generated asyncio module."""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from swarmgen.runtime.chart import Chart
+from swarmgen.runtime.engine import OUTCOME_PREFIX
+from swarmgen.sim.scenario import SimulationError
+
+
+@dataclass(frozen=True)
+class MemberMachine:
+    """One member type's compiled behaviour: the module the asyncio backend generates for it
+    (importing `swarmgen.runtime` instead of a vendored copy), plus what the library needs."""
+
+    member_type: str
+    chart_name: str
+    code: str
+    outputs: dict[str, tuple[tuple[str, str | None], ...]]  # behaviour -> (output, type)
+    scopes: dict[str, str]  # event -> "swarm" | "local"
+
+
+@dataclass(frozen=True)
+class Machines:
+    model: str
+    source: str
+    members: tuple[MemberMachine, ...]
+    composition: dict[str, int]
+
+    def types(self) -> list[str]:
+        return [m.member_type for m in self.members]
+
+
+def compile_machines(model: Path) -> Machines:
+    """Validate and lower the model, and render each member type's module with the asyncio
+    backend, exactly as `swarmgen compile` does."""
+    from swarmgen import __version__, pipeline
+    from swarmgen import diagnostics as dg
+    from swarmgen.backends.asyncio_backend import render_member
+    from swarmgen.ir.query import composition as swarm_composition
+
+    validation = pipeline.validate(model)
+    if validation.model is None or dg.has_errors(validation.diagnostics):
+        raise SimulationError(dg.refusal_line(model, validation.diagnostics))
+    common = {"version": __version__, "source": model.name, "runtime": "swarmgen.runtime"}
+    members = []
+    for chart in validation.charts:  # lowered once, by validate
+        if chart.member is None:
+            continue  # a stand-alone machine: no member runs it
+        members.append(
+            MemberMachine(
+                chart.member,
+                chart.name,
+                render_member(chart, common),
+                {b.name: b.outputs for b in chart.behaviours},
+                {e.name: e.scope or "swarm" for e in chart.events},
+            )
+        )
+    if not members:
+        raise SimulationError(f"{model}: no member type has a state machine; nothing to simulate")
+    composition = swarm_composition(validation.model)
+    return Machines(validation.model.name, model.name, tuple(members), composition)
+
+
+_BUILT: dict[str, tuple[Chart, dict[str, str]]] = {}
+
+
+def build_chart(machine: MemberMachine) -> tuple[Chart, dict[str, str]]:
+    """Run the generated module and its `build()` (once per process)."""
+    key = hashlib.sha256(machine.code.encode()).hexdigest()
+    if key not in _BUILT:
+        namespace: dict[str, Any] = {"__name__": f"swarmgen_sim_{machine.chart_name}"}
+        exec(compile(machine.code, f"<generated {machine.chart_name}>", "exec"), namespace)
+        _BUILT[key] = (namespace["build"](), dict(namespace["EVENT_SCOPES"]))
+    return _BUILT[key]
+
+
+def waited_outcomes(chart: Chart) -> dict[str, frozenset[str]]:
+    """Per state with a behaviour: the outcomes some transition waits for ('*': any)."""
+    descriptors = {e for n in chart.nodes.values() for t in n.transitions for e in t.events}
+    waited: dict[str, frozenset[str]] = {}
+    for node in chart.nodes.values():
+        if node.call is None:
+            continue
+        prefix = f"{OUTCOME_PREFIX}{node.id}."
+        names = {d[len(prefix) :] for d in descriptors if d.startswith(prefix)}
+        if names & {"*", ""} or descriptors & {"*", "outcome", "outcome.*", prefix[:-1]}:
+            names = {"*"}
+        waited[node.id] = frozenset(n for n in names if n)
+    return waited

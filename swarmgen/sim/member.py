@@ -1,0 +1,74 @@
+"""One simulated member: the runtime's `Member` with the batch's discrete-time host services."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from swarmgen.runtime.chart import Call, Chart, Node
+from swarmgen.runtime.engine import Event
+from swarmgen.runtime.member import Behaviour, InMemoryBus, Member
+from swarmgen.sim.library import Activation
+
+if TYPE_CHECKING:
+    from swarmgen.sim.batch import Batch
+
+
+class _NoLibrary:
+    def get(self, name: str) -> Behaviour | None:
+        return None
+
+
+class SimMember(Member):
+    """A runtime `Member` whose host services are the batch's discrete-time ones."""
+
+    def __init__(
+        self,
+        batch: Batch,
+        run: int,
+        g: int,
+        chart: Chart,
+        member_type: str,
+        index: int,
+        bus: InMemoryBus,
+        scopes: Mapping[str, str],
+        chart_name: str,
+    ) -> None:
+        self.batch = batch
+        self.rank = run  # the run (repetition) of the batch it belongs to
+        self.g = g
+        self.index = index
+        self.chart_name = chart_name
+        self.live: dict[str, Activation] = {}  # state id -> its running behaviour
+        self.timer_tokens: dict[str, int] = {}
+        super().__init__(
+            chart, member_type, f"{member_type}-{index}", _NoLibrary(), bus, event_scopes=scopes
+        )
+        self.engine.clock = lambda: float(batch.t[run])
+
+    def deliver(self, event: Event) -> None:
+        self.batch.pending[self.rank].append((self, event))
+
+    def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
+        self.batch.start_call(self, node, call, args, activation)
+
+    def cancel_call(self, node: Node, activation: int) -> None:
+        act = self.live.get(node.id)
+        if act is not None and act.number == activation:
+            self.batch.end(act)
+
+    def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
+        token = self.timer_tokens.get(event, 0) + 1
+        self.timer_tokens[event] = token
+        ticks = max(1, math.ceil(delay_ms / self.batch.scenario.timing["tick_ms"]))
+
+        def fire() -> None:
+            if self.timer_tokens.get(event) == token:
+                del self.timer_tokens[event]
+                self.deliver(self.engine.make_event(event, None, self.member_id))
+
+        self.batch.at(self.rank, self.batch.t[self.rank] + ticks, fire)
+
+    def cancel_timer(self, node: Node, event: str) -> None:
+        self.timer_tokens.pop(event, None)
