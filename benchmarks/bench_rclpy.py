@@ -32,8 +32,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from swarmgen import pipeline  # noqa: E402
+from swarmgen import ros_harness as harness  # noqa: E402
 from swarmgen.backends.rclpy_backend import nodes_package  # noqa: E402
-from swarmgen.ros import harness  # noqa: E402
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 SCRIPT = ROOT / "tests" / "fixtures" / "ros" / "sar_script.json"

@@ -3,7 +3,7 @@ return its trace (one record per step: input, active states, member data).
 
 Backends: `asyncio` and `smach` run the generated Python packages (their vendored runtime, behaviours as
 tasks); `rclpy` runs one member node of the generated ROS 2 package on real rclpy in a
-subprocess (its interfaces built into the venv first; see swarmgen.ros.harness);
+subprocess (its interfaces built into the venv first; see swarmgen.ros_harness);
 `scxml` runs the emitted SCXML in Qt SCXML (system python3 + PySide2), the independent
 reference. Each backend compiles into a temporary directory and imports or loads from there.
 """
@@ -195,8 +195,8 @@ def _run_rclpy(
     chart_name: str,
     scenarios: Sequence[Sequence[dict[str, Any]]],
 ) -> list[list[dict[str, Any]]]:
-    """One member node on real rclpy, in a subprocess (see swarmgen.ros.harness)."""
-    from swarmgen.ros import harness
+    """One member node on real rclpy, in a subprocess (see swarmgen.ros_harness)."""
+    from swarmgen import ros_harness as harness
 
     try:
         return harness.replay_rclpy(rclpy_dir, model, charts, chart_name, scenarios)

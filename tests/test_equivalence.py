@@ -217,7 +217,7 @@ FOCUSED_NAMES = list(FOCUSED)
 def rclpy_traces() -> dict[tuple[str, str], tuple[list[list[dict[str, Any]]], list[Trace]]]:
     """One rclpy replay per case (a subprocess; the interfaces are built once and kept in the
     venv): the sampled scenarios, and for the firewatch scout also the focused ones.
-    Replay runs with ROS discovery off (swarmgen.ros.harness), so no DDS traffic leaves it."""
+    Replay runs with ROS discovery off (swarmgen.ros_harness), so no DDS traffic leaves it."""
     need_rclpy()
     runs: dict[tuple[str, str], tuple[list[list[dict[str, Any]]], list[Trace]]] = {}
     for model, member in RCLPY_CASES:

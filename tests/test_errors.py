@@ -8,8 +8,9 @@ import ast
 import pytest
 
 from swarmgen import console, errors, inputs, jsonfile, outtree, replay
+from swarmgen import ros_harness as harness
 from swarmgen.graph import GraphError, GraphvizError
-from swarmgen.ros import harness, interfaces
+from swarmgen.ros import interfaces
 from swarmgen.sim import scenario
 from swarmgen.trace.bag import TraceError
 from tests.conftest import ROOT

@@ -448,7 +448,7 @@ def ros_built(ros_nodes: Path) -> Path:
     """The node package with its interface package built into the venv (cached by content
     hash: the first run on a venv takes 10-25 s, later ones a few ms)."""
     from swarmgen import pipeline
-    from swarmgen.ros import harness
+    from swarmgen import ros_harness as harness
 
     model = pipeline.compile_model(ros_nodes.parent.parent.parent / "faults.xmi").validation.model
     assert model is not None
@@ -481,7 +481,7 @@ ROS_FAULTS: dict[str, tuple[dict[str, Any], str]] = {
 def test_ros_failing_server_aborts_the_goal(ros_built: Path, tmp_path: Path, case: str) -> None:
     """Two members in one launcher: bot_2's goal ends in Failed (`aborted`); the process and
     bot_1 go on; exit 1, the error named in the summary."""
-    from swarmgen.ros import harness
+    from swarmgen import ros_harness as harness
 
     behaviour, says = ROS_FAULTS[case]
     script = tmp_path / "script.json"

@@ -17,6 +17,7 @@ from typing import Any
 import pytest
 
 from swarmgen import pipeline, replay
+from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import (
     interfaces_package,
     is_relative_ros_name,
@@ -24,7 +25,6 @@ from swarmgen.backends.rclpy_backend import (
     nodes_package,
 )
 from swarmgen.chart.lower import lower
-from swarmgen.ros import harness
 from tests.conftest import ROOT, tool
 from tests.modelkit import ModelKit
 from tests.skips import need_rclpy, requires_rclpy

@@ -26,8 +26,8 @@ pytest.importorskip("psutil", reason="psutil comes with the `ros` extra: run `ma
 import psutil
 
 from swarmgen import pipeline
+from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import interfaces_package, nodes_package
-from swarmgen.ros import harness
 from swarmgen.trace.reader import read_events
 from tests.conftest import ROOT
 

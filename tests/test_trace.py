@@ -545,8 +545,8 @@ LIVE = textwrap.dedent(
 @pytest.mark.skipif(not HAS_RCLPY, reason="rclpy comes with the `ros` extra: run `make ros`")
 def test_live_rclpy_topics_are_recorded_raw(tmp_path: Path) -> None:
     from swarmgen import pipeline
+    from swarmgen import ros_harness as harness
     from swarmgen.backends.rclpy_backend import interfaces_package
-    from swarmgen.ros import harness
 
     result = pipeline.compile_model(SAR, backends=["rclpy"])
     model = result.validation.model

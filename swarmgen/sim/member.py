@@ -3,16 +3,33 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from collections import deque
+from collections.abc import Callable, Mapping
+from typing import Any, Protocol
 
 from swarmgen.runtime.chart import Call, Chart, Node
 from swarmgen.runtime.engine import Event
 from swarmgen.runtime.member import Behaviour, InMemoryBus, Member
 from swarmgen.sim.library import Activation
+from swarmgen.sim.scenario import Scenario
 
-if TYPE_CHECKING:
-    from swarmgen.sim.batch import Batch
+
+class Host(Protocol):
+    """What a member needs of its batch (`swarmgen.sim.batch.Batch`): the runs' clocks and queues,
+    timed callbacks and the behaviours' start and end. A protocol, so that the batch imports the
+    member and not the other way round."""
+
+    t: list[int]
+    pending: list[deque[tuple[SimMember, Event]]]
+    scenario: Scenario
+
+    def at(self, run: int, tick: int, then: Callable[[], None]) -> None: ...
+
+    def end(self, act: Activation) -> None: ...
+
+    def start_call(
+        self, member: SimMember, node: Node, call: Call, args: dict[str, Any], activation: int
+    ) -> None: ...
 
 
 class _NoLibrary:
@@ -25,7 +42,7 @@ class SimMember(Member):
 
     def __init__(
         self,
-        batch: Batch,
+        batch: Host,
         run: int,
         g: int,
         chart: Chart,
