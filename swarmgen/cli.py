@@ -489,20 +489,7 @@ def simulate(
     target_counts = sim_scenario.parse_counts(targets, "--targets") if targets else None
     chosen = chosen.with_overrides(counts, target_counts, reps, seed)
     _check_sweep(model, chosen)
-    shown = [-1]
-
-    def progress(done: int, total: int) -> None:
-        width = 30
-        filled = width * done // max(1, total)
-        tenth = 10 * done // max(1, total)
-        if sys.stderr.isatty() or tenth != shown[0] or done == total:
-            shown[0] = tenth
-            end = "" if sys.stderr.isatty() and done < total else "\n"
-            sys.stderr.write(
-                f"\rswarmgen: simulate [{'#' * filled}{'.' * (width - filled)}] "
-                f"{done}/{total} runs {time.perf_counter() - started:.1f} s{end}"
-            )
-            sys.stderr.flush()
+    progress = _ProgressBar(started)
 
     sim, files = sim_run.simulate_model(model, chosen, output, workers, progress, record, storage)
     coverage = files.get("coverage.csv", b"").decode()
@@ -515,13 +502,38 @@ def simulate(
     unfinished = sum(1 for r in sim.runs if r.reason in ("max_ticks", "stalled"))
     where = f" -> {console.shown(output)}" if output is not None else ""
     click.echo(
-        f"swarmgen: {console.shown(model)}{where}: {len(sim.runs)} runs of {len(sim.configs)} configuration(s) "
-        f"in {time.perf_counter() - started:.1f} s; {unfinished} did not reach the stop "
+        f"swarmgen: {console.shown(model)}{where}: {len(sim.runs)} runs of "
+        f"{len(sim.configs)} configuration(s) in {time.perf_counter() - started:.1f} s; "
+        f"{unfinished} did not reach the stop "
         f"condition; {errors} behaviour error(s)",
         err=True,
     )
     if record is not None:
         click.echo(f"swarmgen: recorded {len(sim.runs)} run(s) into {record} ({storage})", err=True)
+
+
+class _ProgressBar:
+    """simulate's progress on stderr: redrawn in place on a terminal, else one line per tenth."""
+
+    WIDTH = 30
+
+    def __init__(self, started: float) -> None:
+        self.started = started
+        self.shown = -1
+
+    def __call__(self, done: int, total: int) -> None:
+        import time
+
+        filled = self.WIDTH * done // max(1, total)
+        tenth = 10 * done // max(1, total)
+        if sys.stderr.isatty() or tenth != self.shown or done == total:
+            self.shown = tenth
+            end = "" if sys.stderr.isatty() and done < total else "\n"
+            sys.stderr.write(
+                f"\rswarmgen: simulate [{'#' * filled}{'.' * (self.WIDTH - filled)}] "
+                f"{done}/{total} runs {time.perf_counter() - self.started:.1f} s{end}"
+            )
+            sys.stderr.flush()
 
 
 def _check_sweep(model: Path, chosen: Scenario) -> None:

@@ -420,6 +420,49 @@ def _member_lines(model: ir.Model, member: ir.MemberType) -> tuple[str, ...]:
     return tuple(lines)
 
 
+def _shown_hardware(
+    model: ir.Model,
+    member: ir.MemberType | None,
+    by_id: dict[str, ir.HardwareComponent],
+    by_name: dict[str, ir.HardwareComponent],
+) -> list[ir.HardwareComponent]:
+    """Every hardware class, or with `member` its parts' classes and their ancestors."""
+    if member is None:
+        return list(model.hardware)
+    queue = [by_id[p.type_id] for p in member.hardware if p.type_id in by_id]
+    seen: set[str] = set()
+    while queue:
+        component = queue.pop(0)
+        if component.id in seen:
+            continue
+        seen.add(component.id)
+        queue.extend(by_name[g] for g in component.generals if g in by_name)
+    return [h for h in model.hardware if h.id in seen]
+
+
+def _generalisations(
+    shown: list[ir.HardwareComponent],
+    by_name: dict[str, ir.HardwareComponent],
+    box_of: dict[str, str],
+    ids: IdAllocator,
+    boxes: list[Box],
+    links: list[Link],
+) -> None:
+    """Generalisation links of the shown hardware; a general class that is no hardware
+    component gets a box of its own (appended after the others, in first-use order)."""
+    extra: dict[str, str] = {}
+    for component in shown:
+        for general in component.generals:
+            if general in by_name and by_name[general].id in box_of:
+                target = box_of[by_name[general].id]
+            else:
+                if general not in extra:
+                    extra[general] = ids.claim(f"type_{identifier(general, 'class')}")
+                    boxes.append(Box(extra[general], general, NodeKind.CLASS))
+                target = extra[general]
+            links.append(Link(box_of[component.id], target, "", generalisation=True))
+
+
 def composition(model: ir.Model, member: ir.MemberType | None = None) -> Composition:
     """Swarms -> member types (with counts) -> hardware parts (with kinds) -> generalisations.
     With `member`, only what concerns that member type."""
@@ -434,18 +477,7 @@ def composition(model: ir.Model, member: ir.MemberType | None = None) -> Composi
     for component in model.hardware:
         by_name.setdefault(component.name, component)
 
-    shown = list(model.hardware)
-    if member is not None:  # its parts' classes and their ancestors
-        queue = [by_id[p.type_id] for p in member.hardware if p.type_id in by_id]
-        seen: set[str] = set()
-        while queue:
-            component = queue.pop(0)
-            if component.id in seen:
-                continue
-            seen.add(component.id)
-            queue.extend(by_name[g] for g in component.generals if g in by_name)
-        shown = [h for h in model.hardware if h.id in seen]
-
+    shown = _shown_hardware(model, member, by_id, by_name)
     boxes: list[Box] = []
     links: list[Link] = []
     box_of: dict[str, str] = {}
@@ -467,17 +499,7 @@ def composition(model: ir.Model, member: ir.MemberType | None = None) -> Composi
             Box(hid, component.name, NodeKind.HARDWARE, str(component.kind), tuple(lines),
                 component.kind)
         )  # fmt: skip
-    extra: dict[str, str] = {}  # general classes that are not hardware components, by name
-    for component in shown:
-        for general in component.generals:
-            if general in by_name and by_name[general].id in box_of:
-                target = box_of[by_name[general].id]
-            else:
-                if general not in extra:
-                    extra[general] = ids.claim(f"type_{identifier(general, 'class')}")
-                    boxes.append(Box(extra[general], general, NodeKind.CLASS))
-                target = extra[general]
-            links.append(Link(box_of[component.id], target, "", generalisation=True))
+    _generalisations(shown, by_name, box_of, ids, boxes, links)
     for swarm in swarms:
         for part in swarm.members:
             if part.type_id in box_of and part.type_id in member_ids:
