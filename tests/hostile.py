@@ -51,15 +51,28 @@ def swarmgen(
     env: Mapping[str, str] | None = None,
 ) -> Outcome:
     """Run `python -m swarmgen ARGS` in `cwd`; a run past `timeout` seconds is a `Hang`."""
-    words = tuple(os.fspath(a) for a in args)
     environment = {**os.environ, "PYTHONPATH": str(ROOT), **(env or {})}
     environment.pop("SWARMGEN_DEBUG", None)
+    return run_module("swarmgen", *args, cwd=cwd, env=environment, timeout=timeout, stdin=stdin)
+
+
+def run_module(
+    module: str,
+    *args: str | os.PathLike[str],
+    cwd: Path,
+    env: Mapping[str, str],
+    timeout: float,
+    stdin: str | bytes | None = None,
+) -> Outcome:
+    """`python -m MODULE ARGS` in its own session; past `timeout` it is killed with everything
+    under it (killing only the child would orphan its children) and the run is a `Hang`."""
+    words = tuple(os.fspath(a) for a in args)
     data = stdin.encode() if isinstance(stdin, str) else stdin
     started = time.perf_counter()
     process = subprocess.Popen(
-        [sys.executable, "-m", "swarmgen", *words],
+        [sys.executable, "-m", module, *words],
         cwd=cwd,
-        env=environment,
+        env=dict(env),
         stdin=subprocess.PIPE if data is not None else subprocess.DEVNULL,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -71,7 +84,8 @@ def swarmgen(
         os.killpg(process.pid, signal.SIGKILL)
         out, err = process.communicate()
         raise Hang(
-            f"swarmgen {' '.join(words)} ran past {timeout} s\n{err.decode(errors='replace')[-2000:]}"
+            f"{module} {' '.join(words)} ran past {timeout} s\n"
+            f"{err.decode(errors='replace')[-2000:]}"
         ) from None
     return Outcome(
         words,

@@ -14,7 +14,6 @@ from __future__ import annotations
 import importlib.util
 import json
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -25,7 +24,7 @@ from typing import Any
 
 import pytest
 
-from tests.hostile import Hang, Outcome, assert_clean, assert_refused, swarmgen
+from tests.hostile import Outcome, assert_clean, assert_refused, run_module, swarmgen
 from tests.modelkit import ModelKit
 
 PACKAGE = "faults_swarm"
@@ -138,33 +137,9 @@ def package(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def run_package(
     parent: Path, *args: str, env: Mapping[str, str] | None = None, timeout: float = 20.0
 ) -> Outcome:
-    """`python -m faults_swarm ARGS` with the hostile library; a run past `timeout` is a Hang
-    (killed with everything under it, as tests/hostile.py does for swarmgen)."""
+    """`python -m faults_swarm ARGS` with the hostile library; a run past `timeout` is a Hang."""
     environment = {**os.environ, "PYTHONPATH": str(parent), **(env or {})}
-    command = [sys.executable, "-m", PACKAGE, *args]
-    started = time.perf_counter()
-    process = subprocess.Popen(
-        command,
-        cwd=parent,
-        env=environment,
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        start_new_session=True,
-    )
-    try:
-        out, err = process.communicate(timeout=timeout)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        out, err = process.communicate()
-        raise Hang(f"{' '.join(command)} ran past {timeout} s\n{err.decode()[-2000:]}") from None
-    return Outcome(
-        tuple(command[2:]),
-        process.returncode,
-        out.decode(errors="replace"),
-        err.decode(errors="replace"),
-        time.perf_counter() - started,
-    )
+    return run_module(PACKAGE, *args, cwd=parent, env=environment, timeout=timeout)
 
 
 @dataclass(frozen=True)
