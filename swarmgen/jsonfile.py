@@ -105,6 +105,7 @@ def _number_text(value: float) -> str:
 
 
 def key_path(base: str, key: str) -> str:
+    """The path of `key` under `base` as a message shows it (`a.b`, or `a["odd key"]`)."""
     return f"{base}.{key}" if _NAME.fullmatch(key) else f"{base}[{json.dumps(key)}]"
 
 
@@ -131,12 +132,14 @@ def check_keys(value: dict[str, Any], known: Iterable[str], where: str) -> None:
 
 
 def expect_object(value: Any, where: str) -> dict[str, Any]:
+    """`value` if it is a JSON object, else a JsonError at `where`."""
     if not isinstance(value, dict):
         raise JsonError(f"{where}: expected an object, {got(value)}")
     return value
 
 
 def expect_list(value: Any, where: str, *, empty: bool = True) -> list[Any]:
+    """`value` if it is a JSON list (non-empty unless `empty`), else a JsonError."""
     if not isinstance(value, list):
         raise JsonError(f"{where}: expected a list, {got(value)}")
     if not value and not empty:
@@ -145,6 +148,7 @@ def expect_list(value: Any, where: str, *, empty: bool = True) -> list[Any]:
 
 
 def expect_str(value: Any, where: str, *, empty: bool = True) -> str:
+    """`value` if it is a JSON string (non-empty unless `empty`), else a JsonError."""
     if not isinstance(value, str):
         raise JsonError(f"{where}: expected a string, {got(value)}")
     if not value and not empty:

@@ -68,6 +68,7 @@ class IdAllocator:
         self._taken = set(taken)
 
     def claim(self, preferred: str, *alternatives: str) -> str:
+        """The first free one of the names given, else the last one numbered (`_2`, `_3`, ...)."""
         for candidate in (preferred, *alternatives):
             if candidate and candidate not in self._taken:
                 self._taken.add(candidate)

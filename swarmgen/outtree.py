@@ -51,16 +51,20 @@ class OutputError(SwarmgenError):
 
 @dataclass(frozen=True)
 class Manifest:
+    """The `.swarmgen.json` of an output tree: the files swarmgen wrote there, by digest."""
+
     command: str  # the command that wrote the tree
     source: str
     files: Mapping[str, str]  # relative POSIX path -> SHA-256 of its bytes
     pending: Mapping[str, str] = field(default_factory=dict)  # an update under way: new digests
 
     def owns(self, relative: str, digest: str) -> bool:
+        """Whether the file at `relative` with this digest is one swarmgen wrote (or is writing)."""
         return digest in (self.files.get(relative), self.pending.get(relative))
 
     @property
     def listed(self) -> set[str]:
+        """Every path the manifest names, written or pending."""
         return set(self.files) | set(self.pending)
 
 

@@ -34,17 +34,22 @@ Files = dict[PurePosixPath, str]
 
 @dataclass(frozen=True)
 class Validation:
+    """The outcome of validating a model: the IR, its diagnostics and, if clean, its charts."""
+
     model: Model | None
     diagnostics: list[Diagnostic]
     charts: tuple[Chart, ...] = ()  # the lowered model; empty unless it passed the checks
 
     @property
     def exit_code(self) -> dg.ExitCode:
+        """The CLI exit status the diagnostics call for."""
         return dg.exit_code_for(self.diagnostics)
 
 
 @dataclass(frozen=True)
 class Compilation:
+    """A validation and the files it produced for the selected backends."""
+
     validation: Validation
     files: Files  # relative path -> text; empty when the model has errors
 

@@ -113,6 +113,7 @@ def _check_step(step: object, where: str, *, burst_allowed: bool) -> None:
 def replay(
     model: Path, member: str, steps: Sequence[dict[str, Any]], backend: str
 ) -> list[dict[str, Any]]:
+    """One scenario of events through a member's generated code: its trace (see `replay_many`)."""
     return replay_many(model, member, [steps], backend)[0]
 
 

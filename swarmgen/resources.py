@@ -12,6 +12,7 @@ _PACKAGE = Path(__file__).resolve().parent
 
 @cache
 def data_dir(kind: Literal["templates", "schemas"]) -> Path:
+    """The shipped templates or schemas directory: inside the wheel, else the checkout's."""
     for candidate in (_PACKAGE / "_data" / kind, _PACKAGE.parent / kind):
         if candidate.is_dir():
             return candidate

@@ -60,6 +60,7 @@ def ros_env(
 
 
 def check_rclpy() -> None:
+    """Raise RosUnavailable (with the fix) when rclpy cannot be imported."""
     if importlib.util.find_spec("rclpy") is None:
         raise RosUnavailable("rclpy is not installed: run `make ros` (pip install -e '.[ros]')")
 

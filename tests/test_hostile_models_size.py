@@ -20,7 +20,7 @@ import pytest
 
 from swarmgen import pipeline
 from swarmgen.chart.lower import lower
-from swarmgen.check import determinism
+from swarmgen.check.guards import Undecidable, compile_guard, evaluate
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir import expr
 from swarmgen.scxml.emit import serialize
@@ -364,17 +364,17 @@ def test_guard_values_stay_small(guard: str, code: str, tmp_path: Path) -> None:
     ids=["repeat-huge", "repeat-small", "negate-string"],
 )
 def test_evaluator_has_no_string_repetition(text: str, env: dict[str, object]) -> None:
-    guard = determinism.compile_guard(expr.parse_expr(text))
-    assert determinism.evaluate(guard, dict(env)) is not None
-    assert not isinstance(determinism.evaluate(guard, dict(env)), str)
+    guard = compile_guard(expr.parse_expr(text))
+    assert evaluate(guard, dict(env)) is not None
+    assert not isinstance(evaluate(guard, dict(env)), str)
 
 
 def test_evaluator_refuses_to_grow_strings() -> None:
     text = "((((x + x) + (x + x)) + ((x + x) + (x + x))) + (((x + x) + (x + x)) + ((x + x) + (x + x))))"
-    guard = determinism.compile_guard(expr.parse_expr(text))
-    with pytest.raises(determinism.Undecidable):
-        determinism.evaluate(guard, {"x": "y" * 1000})
-    assert determinism.evaluate(guard, {"x": "y"}) == "y" * 16
+    guard = compile_guard(expr.parse_expr(text))
+    with pytest.raises(Undecidable):
+        evaluate(guard, {"x": "y" * 1000})
+    assert evaluate(guard, {"x": "y"}) == "y" * 16
 
 
 # --- 6: attributes

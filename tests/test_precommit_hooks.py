@@ -91,6 +91,16 @@ def test_validate_hook_checks_every_model() -> None:
     assert worst > 0 and done.returncode == worst, done.stdout + done.stderr
 
 
+def test_validate_hook_passes_every_file_in_one_call(tmp_path: Path) -> None:
+    """No shell loop: pre-commit's file list goes to one `swarmgen validate`, worst exit wins."""
+    hook = BY_ID["swarmgen-validate"]
+    assert shlex.split(hook["entry"]) == ["swarmgen", "validate"]
+    assert hook.get("pass_filenames", True) is True
+    done = _entry("swarmgen-validate", SAMPLE_MODELS[0], tmp_path / "missing.xmi", *SAMPLE_MODELS)
+    assert done.returncode == 2 and "no such file [SG001]" in done.stdout, done.stderr
+    assert done.stderr.count(": 0 error(s), 0 warning(s)") == 1 + len(SAMPLE_MODELS)
+
+
 def test_check_hook_runs_the_drift_test() -> None:
     model = SAMPLE_MODELS[0]
     out = ROOT / "generated" / model.parent.name

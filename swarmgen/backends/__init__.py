@@ -26,6 +26,8 @@ SCXML = "scxml"
 
 
 class Backend(Protocol):
+    """An output: renders the validated model and its charts as files in its own folder."""
+
     name: str
 
     def render(self, model: Model, charts: tuple[Chart, ...]) -> Files:

@@ -14,7 +14,17 @@ from swarmgen.backends.pyrender import ChartRenderer, format_python
 from swarmgen.chart.model import Chart
 from swarmgen.render import render
 
-RUNTIME_MODULES = ("chart", "engine", "member", "simulated", "cli", "replay")
+RUNTIME_MODULES = (
+    "chart",
+    "host",
+    "configuration",
+    "engine",
+    "member",
+    "simulated",
+    "args",
+    "cli",
+    "replay",
+)
 
 # `replay`, `sim` and the tests name these here, where the asyncio package is made.
 __all__ = [
@@ -34,6 +44,8 @@ def render_member(chart: Chart, common: dict[str, str]) -> str:
 
 
 class AsyncioBackend(PackageBackend):
+    """The asyncio package: member modules over the vendored standard-library runtime."""
+
     name = "asyncio"
     runtime_modules = RUNTIME_MODULES
     member = staticmethod(render_member)

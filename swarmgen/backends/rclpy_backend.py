@@ -49,8 +49,22 @@ from swarmgen.ros.interfaces import (
     render_interface_package,
 )
 
-RUNTIME_MODULES = ("chart", "engine", "member", "replay")
-ROS_RUNTIME_MODULES = ("node", "simulated", "launcher", "replay")
+RUNTIME_MODULES = ("chart", "host", "configuration", "engine", "member", "replay", "args")
+ROS_RUNTIME_MODULES = (
+    "spec",
+    "messages",
+    "scheduler",
+    "process",
+    "goals",
+    "node",
+    "expressions",
+    "scripts",
+    "servers",
+    "simulated",
+    "station",
+    "launcher",
+    "replay",
+)
 _RESERVED_TYPES = ("Event", "ActiveStates")
 # Module names double as executables and as launcher options (`--uav 2`): keep them clear of
 # the package's other modules and of the launcher's own options.
@@ -118,6 +132,8 @@ def _field_name(name: str, taken: set[str]) -> str:
 
 @dataclass(frozen=True)
 class FieldView:
+    """One behaviour argument or output as a field of its ROS action."""
+
     name: str  # the model's identifier (argument / output)
     field: str  # ROS field name
     type: str  # float64, int64, bool, string, json
@@ -126,6 +142,8 @@ class FieldView:
 
 @dataclass(frozen=True)
 class BehaviourView:
+    """A behaviour as the rclpy backend renders it: its action, ROS name and fields."""
+
     info: BehaviourInfo
     action: str
     ros_name: str
@@ -283,6 +301,8 @@ def _hardware_parameters(model: Model, chart: Chart, taken: IdAllocator) -> list
 
 
 class RclpyBackend:
+    """The ROS 2 output: an interface package and a node package with launcher."""
+
     name = "rclpy"
 
     def render(self, model: Model, charts: tuple[Chart, ...]) -> Files:

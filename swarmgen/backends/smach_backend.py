@@ -17,7 +17,7 @@ from swarmgen.ir import expr
 from swarmgen.names import IdAllocator, identifier, one_line, ros_name
 from swarmgen.render import render
 
-SMACH_RUNTIME = (*RUNTIME_MODULES, "smach")
+SMACH_RUNTIME = (*RUNTIME_MODULES, "smach_states", "smach_containers", "smach_chart", "smach")
 COMPLETION = "done"  # the completion outcome of a Concurrence (`done` is never an event name)
 TOP = "build_state_machine"
 INDENT = "    "
@@ -35,6 +35,8 @@ class Factory:
 
 @dataclass
 class SmachCode:
+    """A chart rendered for SMACH: the shared helper functions and the container factories."""
+
     functions: list[Function]
     factories: list[Factory]
 
@@ -305,6 +307,8 @@ def render_member(chart: Chart, common: dict[str, str]) -> str:
 
 
 class SmachBackend(PackageBackend):
+    """The SMACH package: member modules building SMACH containers over the vendored runtime."""
+
     name = "smach"
     runtime_modules = SMACH_RUNTIME
     member = staticmethod(render_member)

@@ -77,13 +77,12 @@ def _chart(model: Model, chart: c.Chart) -> list[Diagnostic]:
             path = graph.path_without(start, node.id, name)
             if path is not None:
                 found.append(
-                    dg.diag(
-                        dg.INPUT_MAYBE_UNSET,
-                        f"'{node.call.behaviour}' in '{node.name or node.id}' reads '{name}', which may be "
-                        "unset (no default, not assigned on every path)",
+                    dg.INPUT_MAYBE_UNSET.at(
                         spans.get(node.name or "", Span(file=model.source)),
-                        notes=["a path that never assigns it: " + " -> ".join(path)],
-                        hint=f"give '{name}' a default value, or assign it on the way (an effect `{name} = ...`)",
+                        notes=[dg.INPUT_MAYBE_UNSET.note("path", path=" -> ".join(path))],
+                        behaviour=node.call.behaviour,
+                        state=node.name or node.id,
+                        name=name,
                     )
                 )
     return found + _unused_outputs(model, chart, nodes, spans)
@@ -111,11 +110,12 @@ def _unused_outputs(
                 continue
             reported.add((node.call.behaviour, output))
             found.append(
-                dg.diag(
-                    dg.OUTPUT_UNUSED,
-                    f"output '{output}' of '{node.call.behaviour}' is written to '{location}', which "
-                    f"nothing in '{chart.member or chart.name}' reads",
+                dg.OUTPUT_UNUSED.at(
                     spans.get(node.name or "", Span(file=model.source)),
+                    output=output,
+                    behaviour=node.call.behaviour,
+                    location=location,
+                    member=chart.member or chart.name,
                 )
             )
     return found

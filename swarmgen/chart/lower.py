@@ -16,40 +16,27 @@ Lowering decides everything the outputs share (documented in docs/scxml.md):
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 from swarmgen.chart import model as c
-from swarmgen.chart import values
 from swarmgen.chart.cycles import bound_cycles
+from swarmgen.chart.lowering import Copy, Instance
+from swarmgen.chart.transitions import Transitions
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import (
     Behaviour,
     Event,
     FinalState,
     Machine,
-    MemberType,
     Model,
-    OpaqueCode,
-    Property,
     PseudoKind,
     Pseudostate,
     Region,
     State,
-    Transition,
-    Trigger,
     TriggerKind,
     Vertex,
 )
-from swarmgen.ir.query import (
-    ModelIndex,
-    Placed,
-    connection_owner,
-    incoming,
-    initial_of,
-    outgoing,
-    walk,
-)
-from swarmgen.names import IdAllocator, identifier, qualified
+from swarmgen.ir.query import ModelIndex, initial_of, walk
+from swarmgen.names import IdAllocator, identifier
 
 _TRANSIENT = {
     PseudoKind.CHOICE,
@@ -59,10 +46,6 @@ _TRANSIENT = {
     PseudoKind.EXIT_POINT,
 }
 _HISTORY = {PseudoKind.SHALLOW_HISTORY, PseudoKind.DEEP_HISTORY}
-_SKIPPED = {PseudoKind.INITIAL, PseudoKind.JOIN, PseudoKind.TERMINATE}
-
-Instance = tuple[str, ...]  # ids of the submachine states that lead to a machine's copy
-Key = tuple[Instance, str]  # one copy of one vertex
 
 
 def lower(model: Model) -> tuple[c.Chart, ...]:
@@ -91,32 +74,8 @@ def _lower(model: Model) -> tuple[c.Chart, ...]:
     return tuple(charts)
 
 
-@dataclass
-class _Copy:
-    """One machine's copy under one submachine path, with its lookup tables."""
-
-    machine: Machine
-    instance: Instance
-    placed: dict[str, Placed]
-    leaving: dict[str, list[Transition]]
-    arriving: dict[str, list[Transition]]
-    parents: dict[str, str | None]  # vertex id -> id of the state holding it
-    joins: tuple[str, ...] = ()  # ids of the join pseudostates, found once (not per state)
-
-
-@dataclass
-class _Lowering:
-    index: ModelIndex
-    root: Machine
-    member: MemberType | None
-    ids: IdAllocator = field(default_factory=IdAllocator)
-    vertex_ids: dict[Key, str] = field(default_factory=dict)
-    copies: dict[Instance, _Copy] = field(default_factory=dict)
-    data: dict[str, Property] = field(default_factory=dict)
-    terminate_id: str | None = None
-    used_behaviours: dict[str, Behaviour] = field(default_factory=dict)
-
-    # --- chart
+class _Lowering(Transitions):
+    """Lowers one machine (with its submachines) into one chart: data, structure, metadata."""
 
     def chart(self, name: str) -> c.Chart:
         self._collect_data()
@@ -150,9 +109,6 @@ class _Lowering:
             ),
             events=tuple(self._event_info(e) for e in self._used_events()),
         )
-
-    def _initial(self, prop: Property) -> object:
-        return values.initial(prop, self.index.datatypes)
 
     def _event_info(self, event: Event) -> c.EventInfo:
         return c.EventInfo(
@@ -200,84 +156,6 @@ class _Lowering:
             for p in walk(m)
         )
 
-    # --- ids
-
-    def _copy(self, machine: Machine, instance: Instance) -> _Copy:
-        if instance not in self.copies:
-            placed = {p.vertex.id: p for p in walk(machine)}
-            parents = {vid: (p.parent.id if p.parent else None) for vid, p in placed.items()}
-            joins = tuple(
-                vid
-                for vid, p in placed.items()
-                if isinstance(p.vertex, Pseudostate) and p.vertex.kind == PseudoKind.JOIN
-            )
-            self.copies[instance] = _Copy(
-                machine, instance, placed, outgoing(machine), incoming(machine), parents, joins
-            )
-        return self.copies[instance]
-
-    def _allocate(self, machine: Machine, instance: Instance) -> None:
-        """Give every vertex copy a readable id: its name if unique, else the shortest unique
-        qualified suffix (`GoToZone__Moving`)."""
-        chains: dict[Key, list[str]] = {}
-        self._chains(machine, instance, [], chains)
-        for length in range(1, max((len(ch) for ch in chains.values()), default=0) + 1):
-            pending = {k: ch for k, ch in chains.items() if k not in self.vertex_ids}
-            counts: dict[str, int] = {}
-            for chain in pending.values():
-                candidate = qualified(*chain[-length:])
-                counts[candidate] = counts.get(candidate, 0) + 1
-            for key, chain in pending.items():
-                candidate = qualified(*chain[-length:])
-                if counts[candidate] == 1 and (candidate not in self.ids or length == len(chain)):
-                    self.vertex_ids[key] = self.ids.claim(candidate)
-        for key, chain in chains.items():
-            if key not in self.vertex_ids:
-                self.vertex_ids[key] = self.ids.claim(qualified(*chain))
-
-    def _chains(
-        self, machine: Machine, instance: Instance, prefix: list[str], out: dict[Key, list[str]]
-    ) -> None:
-        copy = self._copy(machine, instance)
-        if len(machine.regions) > 1 and not instance:
-            prefix = [*prefix, machine.ident]
-            out[(instance, f"{machine.id}#parallel")] = prefix
-        for point in machine.connection_points:
-            out[(instance, point.id)] = [*prefix, _vertex_name(point)]
-        self._region_chains(copy, machine.regions, instance, prefix, out)
-
-    def _region_chains(
-        self,
-        copy: _Copy,
-        regions: Sequence[Region],
-        instance: Instance,
-        prefix: list[str],
-        out: dict[Key, list[str]],
-    ) -> None:
-        for number, region in enumerate(regions):
-            region_prefix = prefix
-            if len(regions) > 1:
-                region_prefix = [*prefix, identifier(region.name, f"region{number + 1}")]
-                out[(instance, region.id)] = region_prefix
-            for vertex in region.vertices:
-                if isinstance(vertex, Pseudostate) and vertex.kind in _SKIPPED:
-                    continue
-                chain = [*region_prefix, _vertex_name(vertex)]
-                out[(instance, vertex.id)] = chain
-                if isinstance(vertex, State):
-                    for point in vertex.connection_points:
-                        out[(instance, point.id)] = [*chain, _vertex_name(point)]
-                    if vertex.submachine and vertex.submachine in self.index.machines:
-                        sub = self.index.machines[vertex.submachine]
-                        self._chains(sub, (*instance, vertex.id), chain, out)
-                    else:
-                        self._region_chains(copy, vertex.regions, instance, chain, out)
-
-    def _id(self, instance: Instance, vertex_id: str) -> str:
-        return self.vertex_ids[(instance, vertex_id)]
-
-    # --- structure
-
     def _machine_content(
         self, machine: Machine, instance: Instance, at_root: bool
     ) -> tuple[c.Transition | None, list[c.Node]]:
@@ -301,7 +179,7 @@ class _Lowering:
             return c.Transition(events=(), targets=(transient.id,)), [transient, *nodes, *children]
         return initial, nodes + children
 
-    def _region_nodes(self, copy: _Copy, regions: Sequence[Region]) -> list[c.Node]:
+    def _region_nodes(self, copy: Copy, regions: Sequence[Region]) -> list[c.Node]:
         nodes = []
         for region in regions:
             initial, children = self._region(copy, region, at_root=False)
@@ -317,23 +195,18 @@ class _Lowering:
         return nodes
 
     def _region(
-        self, copy: _Copy, region: Region, at_root: bool
+        self, copy: Copy, region: Region, at_root: bool
     ) -> tuple[c.Transition | None, list[c.Node]]:
         initial = None
         initials = initial_of(region)
         if initials:
             leaving = copy.leaving.get(initials[0].id, [])
             if leaving:
-                transition = leaving[0]
-                initial = c.Transition(
-                    events=(),
-                    targets=tuple(self._targets(copy, transition.target)),
-                    actions=self._actions(transition.effect, transition.opaque),
-                )
+                initial = self._default(copy, leaving[0])
         children = [n for v in region.vertices if (n := self._vertex(copy, v)) is not None]
         return initial, children
 
-    def _vertex(self, copy: _Copy, vertex: Vertex) -> c.Node | None:
+    def _vertex(self, copy: Copy, vertex: Vertex) -> c.Node | None:
         if isinstance(vertex, FinalState):
             return c.Node(self._id(copy.instance, vertex.id), "final", name=vertex.name or None)
         if isinstance(vertex, State):
@@ -350,7 +223,7 @@ class _Lowering:
             )
         return None
 
-    def _state(self, copy: _Copy, state: State) -> c.Node:
+    def _state(self, copy: Copy, state: State) -> c.Node:
         sub = self.index.machines.get(state.submachine or "") if state.submachine else None
         regions = sub.regions if sub is not None else state.regions
         sid = self._id(copy.instance, state.id)
@@ -387,27 +260,6 @@ class _Lowering:
             submachine=sub.name if sub is not None else None,
         )
 
-    def _timers(self, copy: _Copy, state: State, sid: str) -> list[c.Timer]:
-        timers = []
-        for transition in copy.leaving.get(state.id, []):
-            for trigger in transition.triggers:
-                if trigger.kind == TriggerKind.TIME:
-                    timers.append(
-                        c.Timer(
-                            self._timer_event(sid, transition, trigger, copy), trigger.delay_ms or 0
-                        )
-                    )
-        return timers
-
-    def _timer_event(self, sid: str, transition: Transition, trigger: Trigger, copy: _Copy) -> str:
-        timed = [
-            (t.id, n)
-            for t in copy.leaving.get(transition.source, [])
-            for n, tr in enumerate(t.triggers)
-            if tr.kind == TriggerKind.TIME
-        ]
-        return f"after.{sid}.{timed.index((transition.id, transition.triggers.index(trigger)))}"
-
     def _call(self, state: State) -> c.Call | None:
         if state.activity is None:
             return None
@@ -431,18 +283,13 @@ class _Lowering:
             behaviour.name, behaviour.ident, behaviour.kind.value, tuple(args), results, outcomes
         )
 
-    def _history(self, copy: _Copy, vertex: Pseudostate) -> c.Node:
+    def _history(self, copy: Copy, vertex: Pseudostate) -> c.Node:
         hid = self._id(copy.instance, vertex.id)
         leaving = copy.leaving.get(vertex.id, [])
         placed = copy.placed[vertex.id]
         default: c.Transition | None = None
         if leaving:
-            transition = leaving[0]
-            default = c.Transition(
-                events=(),
-                targets=tuple(self._targets(copy, transition.target)),
-                actions=self._actions(transition.effect, transition.opaque),
-            )
+            default = self._default(copy, leaving[0])
         else:  # no default given: UML enters the region's default state
             region = placed.region
             initials = initial_of(region) if region is not None else []
@@ -469,220 +316,6 @@ class _Lowering:
             name=vertex.name or None,
             history="deep" if deep else "shallow",
             initial=default,
-        )
-
-    def _transient_transitions(self, copy: _Copy, vertex: Pseudostate) -> list[c.Transition]:
-        leaving = copy.leaving.get(vertex.id, [])
-        if vertex.kind == PseudoKind.FORK and leaving:
-            targets = tuple(t for tr in leaving for t in self._targets(copy, tr.target))
-            actions = tuple(a for tr in leaving for a in self._actions(tr.effect, tr.opaque))
-            return [c.Transition(events=(), targets=targets, actions=actions)]
-        found: list[c.Transition] = []
-        if vertex.kind == PseudoKind.EXIT_POINT and copy.instance:
-            found += self._exit_point(copy, vertex)
-        sid = self._id(copy.instance, vertex.id)
-        for transition in self._ordered(leaving):
-            lowered = self._transition(copy, transition, vertex, sid)
-            if lowered is not None:
-                found.append(lowered)
-        return found
-
-    def _exit_point(self, copy: _Copy, vertex: Pseudostate) -> list[c.Transition]:
-        """A submachine's exit point continues with the outgoing transitions of the
-        ConnectionPointReferences that name it, in the machine that holds the submachine state."""
-        outer = self.copies[copy.instance[:-1]]
-        holder = outer.placed.get(copy.instance[-1])
-        if holder is None or not isinstance(holder.vertex, State):
-            return []
-        sid = self._id(copy.instance, vertex.id)
-        found = []
-        for conn in holder.vertex.connections:
-            if vertex.id in conn.exit:
-                for transition in self._ordered(outer.leaving.get(conn.id, [])):
-                    lowered = self._transition(outer, transition, holder.vertex, sid)
-                    if lowered is not None:
-                        found.append(lowered)
-        return found
-
-    # --- transitions
-
-    @staticmethod
-    def _ordered(transitions: list[Transition]) -> list[Transition]:
-        """Model order, with `else` guards last (the first enabled transition is taken)."""
-        return sorted(transitions, key=lambda t: isinstance(t.guard, expr.Else))
-
-    def _transition(
-        self, copy: _Copy, transition: Transition, source: Vertex, sid: str
-    ) -> c.Transition | None:
-        target = copy.placed.get(transition.target)
-        if (
-            target is not None
-            and isinstance(target.vertex, Pseudostate)
-            and target.vertex.kind == PseudoKind.JOIN
-        ):
-            return None  # stands on the sources' common ancestor (see _joins)
-        internal_self = transition.kind == "internal" and transition.source == transition.target
-        events = self._events(transition, source, sid, copy)
-        outputs = self._outputs_read(source, sid, events)
-        guard = transition.guard
-        if guard is not None and outputs:
-            guard = expr.replace_fields(guard, outputs)
-        return c.Transition(
-            events=events,
-            targets=() if internal_self else tuple(self._targets(copy, transition.target)),
-            cond=None if guard is None or isinstance(guard, expr.Else) else guard,
-            internal=transition.kind == "local",
-            actions=self._actions(transition.effect, transition.opaque, outputs),
-            name=transition.name
-            if transition.name and not transition.name.startswith("Transition")
-            else None,
-        )
-
-    def _outputs_read(self, source: Vertex, sid: str, events: tuple[str, ...]) -> dict[str, str]:
-        """On a transition taken by the outcome of the source's behaviour, `event.<output>` is
-        the member datum the output was just written to (docs/semantics.md: the outcome event
-        itself carries no data, so that it stays an internal event in every engine)."""
-        if not isinstance(source, State) or source.activity is None:
-            return {}
-        if not c.takes_outcome(events, sid):
-            return {}
-        behaviour = self.index.behaviours[source.activity.behaviour]
-        return {p.name: p.name for p in behaviour.outputs if p.name in self.data}
-
-    def _events(
-        self, transition: Transition, source: Vertex, sid: str, copy: _Copy
-    ) -> tuple[str, ...]:
-        if transition.triggers:
-            return tuple(
-                dict.fromkeys(
-                    self._descriptor(t, transition, sid, copy) for t in transition.triggers
-                )
-            )
-        if not isinstance(source, State) or transition.source != source.id:
-            return ()
-        if source.activity is not None and not source.regions and not source.submachine:
-            return (f"outcome.{sid}",)
-        if source.regions or source.submachine:
-            return (f"done.state.{sid}",)
-        return ()
-
-    def _descriptor(self, trigger: Trigger, transition: Transition, sid: str, copy: _Copy) -> str:
-        if trigger.kind == TriggerKind.OUTCOME:
-            return f"outcome.{sid}.{identifier(trigger.name)}"
-        if trigger.kind == TriggerKind.TIME:
-            return self._timer_event(sid, transition, trigger, copy)
-        if trigger.kind == TriggerKind.ANY:
-            return "*"
-        event = self.index.events.get(trigger.event or "")
-        return event.ident if event is not None else identifier(trigger.name)
-
-    def _joins(self, copy: _Copy, state: State) -> list[c.Transition]:
-        found = []
-        for vertex_id in copy.joins:
-            vertex = copy.placed[vertex_id].vertex
-            arriving = copy.arriving.get(vertex_id, [])
-            sources = [t.source for t in arriving]
-            if not sources or self._common_ancestor(copy, sources) != state.id:
-                continue
-            leaving = copy.leaving.get(vertex_id, [])
-            guard = leaving[0].guard if leaving else None
-            events = tuple(
-                dict.fromkeys(
-                    self._descriptor(t, tr, self._id(copy.instance, tr.source), copy)
-                    for tr in arriving
-                    for t in tr.triggers
-                )
-            )
-            actions = tuple(
-                a for t in [*arriving, *leaving] for a in self._actions(t.effect, t.opaque)
-            )
-            found.append(
-                c.Transition(
-                    events=events,
-                    targets=tuple(self._targets(copy, leaving[0].target)) if leaving else (),
-                    cond=None if guard is None or isinstance(guard, expr.Else) else guard,
-                    in_states=tuple(self._id(copy.instance, s) for s in sources),
-                    actions=actions,
-                    join=vertex.name or self._id(copy.instance, vertex_id),
-                )
-            )
-        return found
-
-    @staticmethod
-    def _common_ancestor(copy: _Copy, sources: list[str]) -> str | None:
-        def chain(vertex_id: str) -> list[str]:
-            result = []
-            current = copy.parents.get(vertex_id)
-            while current is not None:
-                result.append(current)
-                current = copy.parents.get(current)
-            return result
-
-        chains = [chain(s) for s in sources]
-        for candidate in chains[0]:
-            if all(candidate in ch for ch in chains[1:]):
-                return candidate
-        return None
-
-    def _targets(self, copy: _Copy, vertex_id: str) -> list[str]:
-        placed = copy.placed.get(vertex_id)
-        if placed is None:
-            owner = connection_owner(copy.machine).get(vertex_id)
-            if owner is None:
-                return []
-            conn = next(cr for cr in owner.connections if cr.id == vertex_id)
-            inner = (*copy.instance, owner.id)
-            if conn.entry and any((inner, e) in self.vertex_ids for e in conn.entry):
-                return [self._id(inner, e) for e in conn.entry]
-            return [self._id(copy.instance, owner.id)]
-        vertex = placed.vertex
-        if isinstance(vertex, Pseudostate) and vertex.kind == PseudoKind.TERMINATE:
-            return [self.terminate_id or ""]
-        return [self._id(copy.instance, vertex_id)]
-
-    # --- actions
-
-    def _data_ident(self, name: str) -> str:
-        prop = self.data.get(name)
-        return prop.ident if prop is not None else identifier(name)
-
-    def _event_ident(self, name: str) -> str:
-        event = self.index.events_by_name.get(name)
-        return event.ident if event is not None else identifier(name)
-
-    def _actions(
-        self,
-        actions: tuple[expr.Action, ...],
-        opaque: tuple[OpaqueCode, ...],
-        outputs: dict[str, str] | None = None,
-    ) -> tuple[c.Action, ...]:
-        lowered: list[c.Action] = []
-        for action in actions:
-            if outputs:
-                action = _read_outputs(action, outputs)
-            if isinstance(action, expr.Assign):
-                lowered.append(c.Assign(self._data_ident(action.target), action.value))
-                continue
-            params = self._params(action.event, action.args)
-            if isinstance(action, expr.Raise):
-                lowered.append(c.Raise(self._event_ident(action.event), params))
-            else:
-                lowered.append(c.Send(self._event_ident(action.event), params))
-        lowered += [c.Opaque(code.language or "unspecified", code.body) for code in opaque]
-        return tuple(lowered)
-
-    def _params(self, event_name: str, args: tuple[expr.Arg, ...]) -> tuple[c.Param, ...]:
-        """The effect's fields, then every declared field it leaves out with its default (the
-        value rule: an event always carries all its fields)."""
-        given = tuple(c.Param(identifier(a.name), a.value) for a in args)
-        event = self.index.events_by_name.get(event_name)
-        if event is None:
-            return given
-        named = {p.name for p in given}
-        return given + tuple(
-            c.Param(f.ident, c.FieldDefault(self._initial(f)))
-            for f in event.fields
-            if f.ident not in named
         )
 
     def _used_events(self) -> list[Event]:
@@ -713,22 +346,3 @@ def _behaviour_info(behaviour: Behaviour) -> c.BehaviourInfo:
         ros_name=ros.name if ros else None,
         ros_type=ros.type if ros else None,
     )
-
-
-def _read_outputs(action: expr.Action, outputs: dict[str, str]) -> expr.Action:
-    if isinstance(action, expr.Assign):
-        return action.model_copy(update={"value": expr.replace_fields(action.value, outputs)})
-    args = tuple(
-        a.model_copy(update={"value": expr.replace_fields(a.value, outputs)}) for a in action.args
-    )
-    return action.model_copy(update={"args": args})
-
-
-def _vertex_name(vertex: Vertex) -> str:
-    if vertex.name:
-        return identifier(vertex.name)
-    if isinstance(vertex, FinalState):
-        return "final"
-    if isinstance(vertex, Pseudostate):
-        return identifier(vertex.kind.value)
-    return "state"

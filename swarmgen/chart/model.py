@@ -16,6 +16,8 @@ NodeKind = Literal["state", "parallel", "final", "history"]
 
 @dataclass(frozen=True, slots=True)
 class Assign:
+    """`location = value` on member data."""
+
     location: str  # data id
     value: expr.Expr
 
@@ -29,6 +31,8 @@ class FieldDefault:
 
 @dataclass(frozen=True, slots=True)
 class Param:
+    """One field of a raised or sent event: its name and value."""
+
     name: str  # identifier
     value: expr.Expr | FieldDefault
 
@@ -62,6 +66,8 @@ Action = Assign | Raise | Send | Opaque
 
 @dataclass(frozen=True, slots=True)
 class Arg:
+    """One input of a behaviour call and the expression that gives it."""
+
     name: str  # input identifier
     value: expr.Expr
     implicit: bool  # read from member data of the same name (no binding in the model)
@@ -83,12 +89,16 @@ class Call:
 
 @dataclass(frozen=True, slots=True)
 class Timer:
+    """A timer a state starts on entry: `event` after `delay_ms`."""
+
     event: str
     delay_ms: int
 
 
 @dataclass(frozen=True, slots=True)
 class Transition:
+    """A lowered transition: events, targets, guard and actions, as every output renders it."""
+
     events: tuple[str, ...]  # SCXML event descriptors; empty: eventless
     targets: tuple[str, ...]  # node ids; empty: targetless (internal transition of UML)
     cond: expr.Expr | None = None
@@ -110,6 +120,8 @@ def takes_outcome(events: tuple[str, ...], state_id: str) -> bool:
 
 @dataclass(frozen=True, slots=True)
 class Node:
+    """A state, parallel state, final state or history node of the chart, with its children."""
+
     id: str
     kind: NodeKind
     name: str | None = None  # the model's name
@@ -128,6 +140,8 @@ class Node:
 
 @dataclass(frozen=True, slots=True)
 class DataItem:
+    """One datum of the member: its ids, type, default and initial value."""
+
     id: str
     name: str
     type: str | None
@@ -137,6 +151,8 @@ class DataItem:
 
 @dataclass(frozen=True, slots=True)
 class BehaviourInfo:
+    """A behaviour the chart calls: kind, library, outcomes, inputs, outputs and ROS binding."""
+
     name: str
     ident: str
     kind: str
@@ -152,6 +168,8 @@ class BehaviourInfo:
 
 @dataclass(frozen=True, slots=True)
 class EventInfo:
+    """An event the chart raises, sends or waits for, with its fields and their defaults."""
+
     name: str
     ident: str
     sender: str | None
@@ -162,6 +180,8 @@ class EventInfo:
 
 @dataclass(frozen=True, slots=True)
 class HardwareInfo:
+    """A hardware part of the member type: name, type and count."""
+
     part: str
     type: str
     count: int

@@ -2,13 +2,8 @@
 
 Each transition is reported once, with the first earlier transition that can fire with it (the
 model order then silently picks that one); transitions without a guard are reported once per
-group. A pair of guards is decided in two steps:
-
-1. without search (`_exclusive`): conjuncts that compare one name with constants and
-   cannot all hold together (`x < 20` and `x >= 20`, `level == 1` and `level == 2`);
-2. by search: each name and event field ranges over the constants the guards compare it with
-   (and their neighbours), booleans and null; a valuation under which both guards hold is
-   reported as the witness.
+group. Whether a pair of guards can hold together is decided by `guards` (without search, then
+by one, whose witness is reported).
 
 The search is bounded by a work budget per model (node evaluations); pairs left when it runs
 out are reported once per group as undecided (a note, SG132), never searched on.
@@ -16,38 +11,32 @@ out are reported once per group as undecided (a note, SG132), never searched on.
 
 from __future__ import annotations
 
-import itertools
-import operator
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from swarmgen import diagnostics as dg
+from swarmgen.check.guards import (
+    Budget,
+    Compiled,
+    Constraints,
+    Undecidable,
+    compared_constants,
+    compile_guard,
+    exclusive,
+    guard_constraints,
+    guard_size,
+    search,
+)
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, PseudoKind, Pseudostate, Transition, TriggerKind
 from swarmgen.ir.query import walk
 
-MAX_VALUATIONS = 20_000  # per pair: past it, the pair counts as exclusive (as it always did)
 # Guard nodes evaluated per model, about 0.25 s: a valuation costs the size of both guards, a
 # pair test PAIR_COST (measured: it takes as long as evaluating 30 nodes). 40 guarded transitions
 # on one trigger used to search for minutes; 2,000 exclusive ones took 4 s of pair tests alone.
 WORK_BUDGET = 4_000_000
 PAIR_COST = 32
-_HINT = "make the guards exclusive (e.g. `[x < 20]` and `[x >= 20]`), or use `else`"
-
-
-@dataclass
-class _Budget:
-    left: int = WORK_BUDGET
-
-    def spend(self, units: int) -> bool:
-        """Take `units` if that many are left."""
-        if units > self.left:
-            self.left = 0
-            return False
-        self.left -= units
-        return True
 
 
 @dataclass(eq=False)
@@ -57,21 +46,22 @@ class _Guarded:
     transition: Transition
     guard: expr.Expr | None
     size: int = 0
-    constraints: _Constraints = field(default_factory=dict)
+    constraints: Constraints = field(default_factory=dict)
     constants: dict[str, set[Any]] = field(default_factory=dict)
     compiled: Compiled | None = None
 
     @classmethod
     def of(cls, transition: Transition) -> _Guarded:
+        """The pieces of `transition`'s guard (none for a transition without one)."""
         guard = transition.guard
         if guard is None:
             return cls(transition, None)
         return cls(
             transition,
             guard,
-            _size(guard),
-            _constraints(guard),
-            _compared_constants(guard),
+            guard_size(guard),
+            guard_constraints(guard),
+            compared_constants(guard),
             compile_guard(guard),
         )
 
@@ -97,12 +87,13 @@ class _Analysis:
     """What one model's groups share: the budget, each guard's pieces, each pair's answer."""
 
     def __init__(self) -> None:
-        self.budget = _Budget()
+        self.budget = Budget(WORK_BUDGET)
         self.guarded: dict[int, _Guarded] = {}
         self.answers: dict[tuple[int, int], _PairResult] = {}
         self.findings: dict[tuple[object, ...], _Finding] = {}
 
     def of(self, transition: Transition) -> _Guarded:
+        """The guard pieces of `transition`, computed on first use."""
         item = self.guarded.get(id(transition))
         if item is None:
             item = self.guarded[id(transition)] = _Guarded.of(transition)
@@ -118,20 +109,24 @@ class _Analysis:
     def _decide(self, first: _Guarded, second: _Guarded) -> _PairResult:
         if not self.budget.spend(PAIR_COST):
             return _Undecided
-        if _exclusive(first.constraints, second.constraints):
+        if exclusive(first.constraints, second.constraints):
             return None
+        compiled = [g for g in (first.compiled, second.compiled) if g is not None]
+        cost = max(1, first.size + second.size)
         try:
-            return _search(first, second, self.budget)
+            return search(compiled, [first.constants, second.constants], cost, self.budget)
         except Undecidable:
             return _Undecided
 
     def add(self, merge: tuple[object, ...], finding: _Finding, key: str) -> _Finding:
+        """Record `finding` on trigger `key`, merged with an earlier one of the same `merge`."""
         kept = self.findings.setdefault(merge, finding)
         kept.keys[key] = None
         return kept
 
 
 def check_determinism(model: Model) -> list[Diagnostic]:
+    """Report transitions from one source on one trigger whose guards can hold together."""
     analysis = _Analysis()
     for machine in model.machines:
         kinds = {p.vertex.id: p.vertex for p in walk(machine)}
@@ -231,52 +226,49 @@ def _diagnostic(finding: _Finding) -> Diagnostic:
     what = _triggers(list(finding.keys))
     first, second = finding.transitions[0], finding.transitions[1]
     if finding.kind == "undecided":
-        return dg.diag(
-            dg.NONDETERMINISM_UNDECIDED,
-            f"could not decide whether {len(finding.pairs) + finding.untested} pair(s) of "
-            f"transitions from '{finding.source}' on {what} exclude each other: the check's "
-            "search budget ran out",
-            second.span,
-            notes=[f"the first such pair: {first.span.location()} and {second.span.location()}"],
-            hint="simpler guards (comparisons of one name with constants) are decided at once",
-        )
-    if finding.kind == "unguarded" and len(finding.transitions) > 2:
-        shown = [t.span.location() for t in finding.transitions[1:4]]
-        more = len(finding.transitions) - 1 - len(shown)
-        return dg.diag(
-            dg.NONDETERMINISTIC,
-            f"'{finding.source}' has {len(finding.transitions)} transitions on {what} without "
-            "a guard; the first in model order always wins",
+        return dg.NONDETERMINISM_UNDECIDED.at(
             second.span,
             notes=[
-                f"the first is at {first.span.location()}",
-                "never taken: " + ", ".join(shown) + (f" and {more} more" if more else ""),
+                dg.NONDETERMINISM_UNDECIDED.note(
+                    "first-pair", first=first.span.location(), second=second.span.location()
+                )
             ],
-            hint=_HINT,
+            count=len(finding.pairs) + finding.untested,
+            source=finding.source,
+            what=what,
+        )
+    if finding.kind == "unguarded" and len(finding.transitions) > 2:
+        code = dg.NONDETERMINISTIC
+        shown = [t.span.location() for t in finding.transitions[1:4]]
+        more = len(finding.transitions) - 1 - len(shown)
+        never = (
+            code.note("never-taken-more", shown=", ".join(shown), more=more)
+            if more
+            else code.note("never-taken", shown=", ".join(shown))
+        )
+        return code.at(
+            second.span,
+            "unguarded",
+            notes=[code.note("first-at", where=first.span.location()), never],
+            source=finding.source,
+            count=len(finding.transitions),
+            what=what,
         )
     return _pair_diagnostic(finding, what)
 
 
 def _pair_diagnostic(finding: _Finding, what: str) -> Diagnostic:
     first, second = finding.transitions
-    notes = [f"the other transition is at {first.span.location()}"]
+    code = dg.NONDETERMINISTIC
+    notes = [code.note("other-at", where=first.span.location())]
     if finding.witness:
-        notes.append(
-            "both guards hold when "
-            + ", ".join(f"{k} = {_shown(v)}" for k, v in sorted(finding.witness.items()))
-        )
+        values = ", ".join(f"{k} = {_shown(v)}" for k, v in sorted(finding.witness.items()))
+        notes.append(code.note("witness", values=values))
     elif first.guard is None and second.guard is None:
-        notes.append("neither has a guard")
+        notes.append(code.note("no-guards"))
     else:
-        notes.append("one has no guard, and the other's guard can hold")
-    return dg.diag(
-        dg.NONDETERMINISTIC,
-        f"'{finding.source}' has two transitions on {what} that can both fire; "
-        "the first in model order wins",
-        second.span,
-        notes=notes,
-        hint=_HINT,
-    )
+        notes.append(code.note("one-guard"))
+    return code.at(second.span, notes=notes, source=finding.source, what=what)
 
 
 def _triggers(keys: list[str]) -> str:
@@ -289,229 +281,3 @@ def _triggers(keys: list[str]) -> str:
 def _shown(value: Any) -> str:
     text = repr(value)
     return text if len(text) <= 60 else text[:59] + "…"
-
-
-def _search(first: _Guarded, second: _Guarded, budget: _Budget) -> dict[str, Any] | None:
-    guards = [g for g in (first.compiled, second.compiled) if g is not None]
-    constants: dict[str, set[Any]] = {}
-    for item in (first, second):
-        for name, compared in item.constants.items():
-            constants.setdefault(name, set()).update(compared)
-    variables = sorted(constants)
-    domains = [_domain(constants[v]) for v in variables]
-    cost = max(1, first.size + second.size)
-    for values in itertools.islice(itertools.product(*domains), MAX_VALUATIONS):
-        if not budget.spend(cost):
-            raise Undecidable("the search budget ran out")
-        env = dict(zip(variables, values, strict=True))
-        if all((v := evaluate(g, env)) is not _UNDEFINED and v for g in guards):
-            return {k: v for k, v in env.items() if v is not _UNDEFINED}
-    return None
-
-
-def _domain(constants: set[Any]) -> list[Any]:
-    values: list[Any] = [True, False, None]
-    for constant in sorted(constants, key=repr):
-        if isinstance(constant, bool) or constant is None:
-            continue
-        if isinstance(constant, int | float):
-            values += [constant - 1, constant, constant + 1, constant + 0.5, constant - 0.5]
-        else:
-            values += [constant, f"{constant}~"]
-    if not constants:
-        values += [0, 1, -1]
-    return list(dict.fromkeys(values))
-
-
-# --- guards in pieces: size, compared constants, conjunct constraints
-
-_UNDEFINED = object()
-_ORDER = {"<", "<=", ">", ">="}
-_FLIPPED = {"<": ">", "<=": ">=", ">": "<", ">=": "<=", "==": "==", "!=": "!="}
-_Constraints = dict[str, list[tuple[str, Any]]]  # name -> (op, constant): `name op constant`
-
-
-class Undecidable(Exception):
-    """The search ran out of budget, or a value grew past what the check computes."""
-
-
-def _size(e: expr.Expr) -> int:
-    return sum(1 for _ in expr.walk(e))
-
-
-def _names(e: expr.Expr) -> str | None:
-    if isinstance(e, expr.Name):
-        return e.name
-    if isinstance(e, expr.EventField):
-        return f"event.{e.field}"
-    return None
-
-
-def _compared_constants(guard: expr.Expr) -> dict[str, set[Any]]:
-    """Every name and event field of the guard, with the constants it is compared with (one
-    walk: asking per name would be quadratic in the guard's size)."""
-    found: dict[str, set[Any]] = {}
-    for node in expr.walk(guard):
-        name = _names(node)
-        if name is not None:
-            found.setdefault(name, set())
-        elif isinstance(node, expr.Binary):
-            for side, other in ((node.left, node.right), (node.right, node.left)):
-                name = _names(side)
-                if name is not None and isinstance(other, expr.Const):
-                    found.setdefault(name, set()).add(other.value)
-    return found
-
-
-def _conjuncts(guard: expr.Expr) -> list[expr.Expr]:
-    found, stack = [], [guard]
-    while stack:
-        node = stack.pop()
-        if isinstance(node, expr.Binary) and node.op == "and":
-            stack += [node.right, node.left]
-        else:
-            found.append(node)
-    return found
-
-
-def _constraints(guard: expr.Expr) -> _Constraints:
-    """The conjuncts `name op constant` (or `constant op name`) that the guard requires."""
-    found: _Constraints = {}
-    for node in _conjuncts(guard):
-        if not isinstance(node, expr.Binary) or node.op not in _FLIPPED:
-            continue
-        op: str = node.op
-        name, constant = _names(node.left), node.right
-        if name is None:
-            name, op, constant = _names(node.right), _FLIPPED[op], node.left
-        if name is not None and isinstance(constant, expr.Const):
-            found.setdefault(name, []).append((op, constant.value))
-    return found
-
-
-def _exclusive(first: _Constraints, second: _Constraints) -> bool:
-    """True when some name is constrained by both guards in ways that cannot hold together."""
-    return any(
-        not _satisfiable(first[name] + second[name]) for name in first.keys() & second.keys()
-    )
-
-
-def _satisfiable(constraints: list[tuple[str, Any]]) -> bool:
-    """Whether one value can meet every `op constant` (False only when that is certain).
-
-    With an equality the value is that constant, up to `==` (1, 1.0 and True are one value), so
-    the constant itself is tested. Otherwise the orderings bound an interval of numbers or of
-    strings (a value cannot be both); `!=` only removes points."""
-    for op, constant in constraints:
-        if op == "==":
-            return all(_holds(constant, o, c) for o, c in constraints)
-    ordered = [(op, c) for op, c in constraints if op in _ORDER]
-    if not ordered:
-        return True
-    if len({isinstance(c, str) for _, c in ordered}) > 1 or any(c is None for _, c in ordered):
-        return False  # nothing compares with both a string and a number, nor with null
-    # the tightest bounds: the largest lower one (strict first), the smallest upper one
-    low = max(((c, op == ">") for op, c in ordered if op in {">", ">="}), default=None)
-    high = min(((c, op != "<") for op, c in ordered if op in {"<", "<="}), default=None)
-    if low is None or high is None:
-        return True
-    if low[0] != high[0]:
-        return bool(low[0] < high[0])  # strings: maybe nothing lies between; the search decides
-    point = low[0]
-    return not low[1] and high[1] and all(c != point for op, c in constraints if op == "!=")
-
-
-def _holds(value: Any, op: str, constant: Any) -> bool:
-    try:
-        return bool(_OPERATIONS[op](value, constant))
-    except TypeError:
-        return False  # the evaluator's meaning: an error makes the comparison false
-
-
-# --- the evaluator
-
-# Values the search computes stay small: a string of a guard repeated (`event.note * 2**53`) or
-# doubled by nesting would exhaust memory. Past these sizes the pair is undecided.
-MAX_STRING = 10_000
-MAX_INT_BITS = 1_100  # beyond a double's range: ECMAScript could not hold the value anyway
-
-
-Compiled = Callable[[dict[str, Any]], Any]
-
-
-def evaluate(guard: Compiled, env: dict[str, Any]) -> Any:
-    """Run a compiled guard; an error makes it undefined (false), as at run time. Raises
-    Undecidable when a value outgrows MAX_STRING or MAX_INT_BITS."""
-    try:
-        return guard(env)
-    except (TypeError, ZeroDivisionError, ValueError, AttributeError, OverflowError):
-        return _UNDEFINED
-
-
-def compile_guard(e: expr.Expr) -> Compiled:
-    """The expression as nested closures, built once per guard: the search runs each guard
-    thousands of times, and walking the tree each time cost most of it."""
-    if isinstance(e, expr.Const):
-        value = e.value
-        return lambda env: value
-    name = _names(e)
-    if name is not None:
-        return lambda env: env.get(name)
-    if isinstance(e, expr.Attr):
-        return _attribute
-    if isinstance(e, expr.Unary):
-        operand = compile_guard(e.operand)
-        if e.op == "not":
-            return lambda env: not operand(env)
-        if e.op == "-":
-            return lambda env: -_number(operand(env))
-        return lambda env: +_number(operand(env))
-    if isinstance(e, expr.Binary):
-        return _compile_binary(e.op, compile_guard(e.left), compile_guard(e.right))
-    return lambda env: True  # Else
-
-
-def _attribute(env: dict[str, Any]) -> Any:
-    raise TypeError("attribute of an unknown value")
-
-
-def _number(value: Any) -> int | float:
-    if isinstance(value, str) or value is None:
-        raise TypeError("arithmetic takes numbers")
-    return value  # type: ignore[no-any-return]
-
-
-def _compile_binary(op: str, left: Compiled, right: Compiled) -> Compiled:
-    if op == "and":
-        return lambda env: right(env) if (value := left(env)) else value
-    if op == "or":
-        return lambda env: value if (value := left(env)) else right(env)
-    operation = _OPERATIONS[op]
-    if op not in _ARITHMETIC:
-        return lambda env: operation(left(env), right(env))
-
-    def arithmetic(env: dict[str, Any]) -> Any:
-        a, b = left(env), right(env)
-        # the language's arithmetic: numbers, and `+` of two strings; never Python's string
-        # repetition (`"a" * 3` is NaN in ECMAScript, a type error for the checks)
-        if not (op == "+" and isinstance(a, str) and isinstance(b, str)):
-            a, b = _number(a), _number(b)
-        return _bounded(operation(a, b))
-
-    return arithmetic
-
-
-def _bounded(value: Any) -> Any:
-    if isinstance(value, str) and len(value) > MAX_STRING:
-        raise Undecidable(f"a string longer than {MAX_STRING} characters")
-    if isinstance(value, int) and value.bit_length() > MAX_INT_BITS:
-        raise Undecidable(f"an integer of more than {MAX_INT_BITS} bits")
-    return value
-
-
-_ARITHMETIC = {"+", "-", "*", "/", "%"}
-_OPERATIONS: dict[str, Callable[[Any, Any], Any]] = {
-    "==": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le, ">": operator.gt,
-    ">=": operator.ge, "+": operator.add, "-": operator.sub, "*": operator.mul,
-    "/": operator.truediv, "%": operator.mod,
-}  # fmt: skip

@@ -26,6 +26,7 @@ def _sent_by_members(model: Model) -> set[str]:
 
 
 def check_events(model: Model) -> list[Diagnostic]:
+    """Report events nobody sends, events nobody handles and unhandled behaviour outcomes."""
     if not any(e.swarm_event for e in model.events):
         return []  # plain UML models: their environment sends the signals
     sent = _sent_by_members(model)
@@ -39,25 +40,10 @@ def check_events(model: Model) -> list[Diagnostic]:
                     continue
                 triggered.setdefault(trigger.name, []).append(trigger)
                 if trigger.name not in sent and trigger.name not in station:
-                    found.append(
-                        dg.diag(
-                            dg.NEVER_SENT,
-                            f"transition waits for '{trigger.name}', which nobody sends",
-                            trigger.span,
-                            hint=f"set sender=station on '{trigger.name}', send it from an effect "
-                            "(`send ...`), or name it in the `emits` tag of the behaviour that sends it",
-                        )
-                    )
+                    found.append(dg.NEVER_SENT.at(trigger.span, event=trigger.name))
     for event in model.events:
         if (event.name in sent or event.name in station) and event.name not in triggered:
-            found.append(
-                dg.diag(
-                    dg.NEVER_HANDLED,
-                    f"event '{event.name}' is sent, but no member type reacts to it",
-                    event.span,
-                    hint="add a transition on it, or stop sending it",
-                )
-            )
+            found.append(dg.NEVER_HANDLED.at(event.span, event=event.name))
     return found
 
 
@@ -85,12 +71,12 @@ def check_unhandled_outcomes(model: Model) -> list[Diagnostic]:
                 if outcome in handled or outcome in _UNWAITED:
                     continue
                 found.append(
-                    dg.diag(
-                        dg.UNHANDLED_OUTCOME,
-                        f"'{state.name}' handles {', '.join(sorted(handled))} of '{behaviour.name}' "
-                        f"but not '{outcome}': the state would be stuck with a finished behaviour",
+                    dg.UNHANDLED_OUTCOME.at(
                         state.span,
-                        hint=f"add a transition from '{state.name}' on '{outcome}'",
+                        state=state.name,
+                        handled=", ".join(sorted(handled)),
+                        behaviour=behaviour.name,
+                        outcome=outcome,
                     )
                 )
     return found

@@ -15,6 +15,7 @@ _NO_EVENT = frozenset[str]()
 
 
 def check_expressions(model: Model) -> list[Diagnostic]:
+    """Report unknown names, event fields and events in guards, actions and bindings."""
     index = ModelIndex(model)
     found: list[Diagnostic] = []
     for machine in model.machines:
@@ -65,34 +66,39 @@ def _names(
 ) -> list[Diagnostic]:
     found = []
     for name in sorted(expr.free_names(e) - scope.keys()):
-        found.append(
-            dg.diag(
-                dg.UNKNOWN_NAME,
-                f"{what} uses '{name}', which is not member data",
-                span,
-                hint=_suggest(name, scope) or "declare it as an attribute of the member type",
-            )
-        )
+        found.append(_unknown_name(span, dg.DEFAULT, what, name, scope))
     if fields is not None:
         for name in sorted(expr.event_fields(e) - fields):
             found.append(
-                dg.diag(
-                    dg.UNKNOWN_FIELD,
-                    f"{what} reads event.{name}, but the triggering event has no field '{name}'",
+                dg.UNKNOWN_FIELD.at(
                     span,
-                    notes=[f"its fields are: {', '.join(sorted(fields)) or 'none'}"],
+                    notes=[_listing(dg.UNKNOWN_FIELD, "fields", fields)],
+                    what=what,
+                    name=name,
                 )
             )
     return found
 
 
-def _suggest(name: str, scope: Iterable[str]) -> str | None:
+def _unknown_name(
+    span: Span, variant: str, what: str, name: str, scope: Iterable[str]
+) -> Diagnostic:
+    """SG112 (`variant`: a use or "assigns"), hinting at the member data spelt alike if any."""
+    near = _near(name, scope)
+    if near is None:
+        return dg.UNKNOWN_NAME.at(span, variant, what=what, name=name)
+    variant = "near" if variant == dg.DEFAULT else f"{variant}-near"
+    return dg.UNKNOWN_NAME.at(span, variant, what=what, name=name, near=near)
+
+
+def _near(name: str, scope: Iterable[str]) -> str | None:
+    """The member data whose name differs from `name` only in case or underscores."""
     lowered = name.lower()
     for candidate in sorted(scope):
         if candidate.lower() == lowered or candidate.replace("_", "").lower() == lowered.replace(
             "_", ""
         ):
-            return f"did you mean '{candidate}'?"
+            return candidate
     return None
 
 
@@ -108,15 +114,7 @@ def _actions(
     for action in actions:
         if isinstance(action, expr.Assign):
             if action.target not in scope:
-                found.append(
-                    dg.diag(
-                        dg.UNKNOWN_NAME,
-                        f"{what} assigns '{action.target}', which is not member data",
-                        span,
-                        hint=_suggest(action.target, scope)
-                        or "declare it as an attribute of the member type",
-                    )
-                )
+                found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
         for arg in action.args:
@@ -133,21 +131,16 @@ def _event_use(
     if event is None:
         if not index.model.uses_profile and not index.model.events:
             return []
-        return [
-            dg.diag(
-                dg.UNKNOWN_EVENT,
-                f"{what} {verb} '{action.event}', which is not a declared event",
-                span,
-                hint=f"declare a Signal «SwarmEvent» named '{action.event}'",
-            )
-        ]
+        return [dg.UNKNOWN_EVENT.at(span, "action", what=what, verb=verb, event=action.event)]
     declared = {f.name for f in event.fields}
     return [
-        dg.diag(
-            dg.EVENT_ARGUMENT,
-            f"{what} {verb} '{event.name}' with field '{arg.name}', which the event does not have",
+        dg.EVENT_ARGUMENT.at(
             span,
-            notes=[f"its fields are: {', '.join(sorted(declared)) or 'none'}"],
+            notes=[_listing(dg.EVENT_ARGUMENT, "fields", declared)],
+            what=what,
+            verb=verb,
+            event=event.name,
+            field=arg.name,
         )
         for arg in action.args
         if arg.name not in declared
@@ -165,11 +158,12 @@ def _bindings(index: ModelIndex, state: State, scope: dict[str, Property]) -> li
     for binding in state.activity.bindings:
         if binding.name not in inputs:
             found.append(
-                dg.diag(
-                    dg.BINDING_ERROR,
-                    f"'{behaviour.name}' has no input '{binding.name}'",
+                dg.BINDING_ERROR.at(
                     state.activity.span,
-                    notes=[f"its inputs are: {', '.join(sorted(inputs)) or 'none'}"],
+                    "no-input",
+                    notes=[_listing(dg.BINDING_ERROR, "inputs", inputs)],
+                    behaviour=behaviour.name,
+                    name=binding.name,
                 )
             )
         found.extend(
@@ -177,3 +171,9 @@ def _bindings(index: ModelIndex, state: State, scope: dict[str, Property]) -> li
         )
     # inputs that are neither bound nor member data: see hardware.check_parameters (per member)
     return found
+
+
+def _listing(code: dg.Code, what: str, names: Iterable[str]) -> str:
+    """The note listing what an event or behaviour has (`its fields are: a, b`), or none."""
+    shown = ", ".join(sorted(names))
+    return code.note(what, **{what: shown}) if shown else code.note(f"no-{what}")

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir.nodes import Model, State
+from swarmgen.ir.nodes import Behaviour, MemberType, Model, State
 from swarmgen.ir.query import ModelIndex, walk
 
 
@@ -25,20 +25,29 @@ def check_capabilities(model: Model) -> list[Diagnostic]:
                     if need in provided:
                         continue
                     found.append(
-                        dg.diag(
-                            dg.MISSING_CAPABILITY,
-                            f"state '{state.name}' of '{member.name}' runs '{behaviour.name}', which "
-                            f"requires {need}; '{member.name}' has no {need}",
+                        dg.MISSING_CAPABILITY.at(
                             state.activity.span,
-                            notes=[
-                                f"'{member.name}' has: {', '.join(sorted(p.name + ': ' + p.type_name for p in member.hardware)) or 'no hardware'}",
-                                f"'{behaviour.name}' requires: {', '.join(behaviour.requires)}",
-                            ],
-                            hint=f"give '{member.name}' a part whose class is or specialises {need}, "
-                            f"or run another behaviour in '{state.name}'",
+                            notes=_capability_notes(member, behaviour),
+                            state=state.name,
+                            member=member.name,
+                            behaviour=behaviour.name,
+                            need=need,
                         )
                     )
     return found
+
+
+def _capability_notes(member: MemberType, behaviour: Behaviour) -> list[str]:
+    """What the member type has and what the behaviour requires, for SG211's notes."""
+    code = dg.MISSING_CAPABILITY
+    parts = sorted(f"{p.name}: {p.type_name}" for p in member.hardware)
+    has = (
+        code.note("has", member=member.name, hardware=", ".join(parts))
+        if parts
+        else code.note("has-nothing", member=member.name)
+    )
+    needs = ", ".join(behaviour.requires)
+    return [has, code.note("requires", behaviour=behaviour.name, needs=needs)]
 
 
 def check_parameters(model: Model) -> list[Diagnostic]:
@@ -59,13 +68,12 @@ def check_parameters(model: Model) -> list[Diagnostic]:
                     if prop.name in bound or prop.name in scope or prop.name in parameters:
                         continue
                     found.append(
-                        dg.diag(
-                            dg.MISSING_PARAMETER,
-                            f"input '{prop.name}' of '{behaviour.name}' (state '{state.name}' of "
-                            f"'{member.name}') is neither bound, member data nor a hardware parameter",
+                        dg.MISSING_PARAMETER.at(
                             state.activity.span,
-                            hint=f"bind it in the doActivity (`{prop.name} = ...`), declare member data "
-                            f"'{prop.name}', or give a hardware part the parameter '{prop.name}'",
+                            input=prop.name,
+                            behaviour=behaviour.name,
+                            state=state.name,
+                            member=member.name,
                         )
                     )
     # machines no member runs (plain UML models): inputs must come from bindings or data
@@ -81,11 +89,11 @@ def check_parameters(model: Model) -> list[Diagnostic]:
                 for prop in behaviour.inputs:
                     if prop.name not in bound and prop.name not in scope:
                         found.append(
-                            dg.diag(
-                                dg.MISSING_PARAMETER,
-                                f"input '{prop.name}' of '{behaviour.name}' is neither bound nor member data",
+                            dg.MISSING_PARAMETER.at(
                                 state.activity.span,
-                                hint=f"bind it in the doActivity body (`{prop.name} = ...`)",
+                                "no-hardware",
+                                input=prop.name,
+                                behaviour=behaviour.name,
                             )
                         )
     return found

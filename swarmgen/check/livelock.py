@@ -48,6 +48,7 @@ class _Undecided(Exception):
 
 
 def check_livelocks(model: Model) -> list[Diagnostic]:
+    """Report eventless transition cycles in single-region machines."""
     index = ModelIndex(model)
     found: list[Diagnostic] = []
     for machine in model.machines:
@@ -298,17 +299,13 @@ class _Run:
         cycle = cycle[first:] + cycle[:first]
         names = [self._name(t.source) for t in cycle] + [self._name(cycle[0].source)]
         shown = " -> ".join(names)
-        return dg.diag(
-            dg.LIVELOCK,
-            f"{shown}: once taken, these transitions take each other forever without an input "
-            "from outside (no guard, no trigger from outside, no behaviour to wait for)",
+        return dg.LIVELOCK.at(
             cycle[0].span,
             notes=[
-                f"then the transition from {self._name(t.source)} at {t.span.location()}"
+                dg.LIVELOCK.note("then", source=self._name(t.source), where=t.span.location())
                 for t in cycle[1:]
             ],
-            hint="give one of these transitions a guard or a trigger, or let its state run a "
-            "behaviour (left as it is, the member would spin without end at run time)",
+            loop=shown,
         )
 
 

@@ -25,6 +25,7 @@ class _Named(Protocol):
 
 
 def check_collisions(model: Model) -> list[Diagnostic]:
+    """Report model names that collide once made identifiers, and unsafe file names."""
     found: list[Diagnostic] = []
     found += _collisions("member type", model.member_types)
     found += _collisions("behaviour", model.behaviours)
@@ -48,18 +49,15 @@ def _collisions(what: str, items: Iterable[_Named]) -> list[Diagnostic]:
         if other is item:
             continue
         same = other.name == item.name
-        message = (
-            f"{what} '{item.name}' is declared twice"
-            if same
-            else f"{what} '{item.name}' and '{other.name}' both become the identifier '{item.ident}'"
-        )
+        values = {"what": what, "name": item.name}
+        if not same:
+            values |= {"other": other.name, "ident": item.ident}
         found.append(
-            dg.diag(
-                dg.NAME_COLLISION,
-                message,
+            dg.NAME_COLLISION.at(
                 item.span,
-                notes=[f"the other is at {other.span.location()}"],
-                hint="rename one of them" if not same else "remove or rename the duplicate",
+                "twice" if same else dg.DEFAULT,
+                notes=[dg.NAME_COLLISION.note("other-at", where=other.span.location())],
+                **values,
             )
         )
     return found
@@ -83,25 +81,21 @@ def check_output_paths(model: Model) -> list[Diagnostic]:
         reserved = [p for p in paths if _reserved(p)]
         if reserved:
             found.append(
-                dg.diag(
-                    dg.RESERVED_FILE_NAME,
-                    f"{what} '{name}' gives the file {reserved[0]}, a name Windows reserves for a "
-                    "device: the output cannot be checked out or written there",
+                dg.RESERVED_FILE_NAME.at(
                     span,
-                    notes=[f"also: {', '.join(reserved[1:])}"] if len(reserved) > 1 else [],
-                    hint=f"rename the {what} (CON, PRN, AUX, NUL, COM1-9, LPT1-9 are reserved)",
+                    notes=[dg.RESERVED_FILE_NAME.note("also", files=", ".join(reserved[1:]))]
+                    if len(reserved) > 1
+                    else [],
+                    what=what,
+                    name=name,
+                    file=reserved[0],
                 )
             )
         longest = max(paths, key=len)
         if len(longest) > PATH_LIMIT - OUTPUT_DIR_ALLOWANCE:
             found.append(
-                dg.diag(
-                    dg.PATH_TOO_LONG,
-                    f"{what} '{name}' gives the path {longest} ({len(longest)} characters inside "
-                    f"the output directory): with the directory itself it may pass Windows' "
-                    f"{PATH_LIMIT}-character limit",
-                    span,
-                    hint=f"shorten the {what}'s name",
+                dg.PATH_TOO_LONG.at(
+                    span, what=what, name=name, path=longest, length=len(longest), limit=PATH_LIMIT
                 )
             )
     return found

@@ -78,6 +78,7 @@ def _successors(
 
 
 def check_reachability(model: Model) -> list[Diagnostic]:
+    """Report unreachable states, states with no way out and machines that never end."""
     index = ModelIndex(model)
     wrapped = {s for m in model.machines for s in index.submachines(m)}
     found: list[Diagnostic] = []
@@ -88,12 +89,7 @@ def check_reachability(model: Model) -> list[Diagnostic]:
             vertex = where.vertex
             if isinstance(vertex, State | FinalState) and vertex.id not in reached:
                 found.append(
-                    dg.diag(
-                        dg.UNREACHABLE_STATE,
-                        f"state '{vertex.name}' of '{machine.name}' can never be entered",
-                        vertex.span,
-                        hint="add a transition to it, or remove it",
-                    )
+                    dg.UNREACHABLE_STATE.at(vertex.span, state=vertex.name, machine=machine.name)
                 )
         if machine.id not in wrapped:
             found += _no_way_out(machine, placed, reached)
@@ -127,15 +123,7 @@ def _no_way_out(machine: Machine, placed: list[Placed], reached: set[str]) -> li
             chain.append(parent)
             parent = parents.get(parent.id)
         if not any(s.id in sources for s in chain):
-            found.append(
-                dg.diag(
-                    dg.NO_WAY_OUT,
-                    f"state '{state.name}' of '{machine.name}' has no way out: no transition leaves "
-                    "it or a state that contains it",
-                    state.span,
-                    hint="add a transition out of it, or make it a final state",
-                )
-            )
+            found.append(dg.NO_WAY_OUT.at(state.span, state=state.name, machine=machine.name))
     return found
 
 
@@ -160,11 +148,4 @@ def _never_ends(
     )
     if terminates or any(f in reached for f in top_finals):
         return []
-    return [
-        dg.diag(
-            dg.NEVER_ENDS,
-            f"state machine '{machine.name}' can never end: no final state of its top level is reachable",
-            machine.span,
-            hint="add a final state reached on the mission's end or abort (e.g. after landing)",
-        )
-    ]
+    return [dg.NEVER_ENDS.at(machine.span, machine=machine.name)]

@@ -52,11 +52,14 @@ class _Sizes:
             if heaviest is None:
                 break
             state, sub, users = heaviest
-            times = f"{users} states use it" if users > 1 else "1 state uses it"
-            steps.append(
-                f"'{machine.name}::{state.name}' inlines '{sub.name}' "
-                f"({self.of(sub):,} states; {times})"
-            )
+            values = {"machine": machine.name, "state": state.name, "sub": sub.name}
+            if users > 1:
+                step = dg.MODEL_TOO_LARGE.note(
+                    "inlines", users=users, states=self.of(sub), **values
+                )
+            else:
+                step = dg.MODEL_TOO_LARGE.note("inlines-once", states=self.of(sub), **values)
+            steps.append(step)
             machine = sub
             seen.add(sub.id)
         return steps
@@ -95,14 +98,12 @@ def check_size(model: Model) -> list[Diagnostic]:
         if total <= MAX_INLINED_STATES:
             continue
         found.append(
-            dg.diag(
-                dg.MODEL_TOO_LARGE,
-                f"machine '{machine.name}' has {total:,} states once its submachines are "
-                f"inlined; the limit is {MAX_INLINED_STATES:,}",
+            dg.MODEL_TOO_LARGE.at(
                 machine.span,
                 notes=sizes.chain(machine),
-                hint="each submachine state is a copy of its machine: a machine used twice per "
-                "level doubles at every level; use fewer submachine states per level",
+                machine=machine.name,
+                total=total,
+                limit=MAX_INLINED_STATES,
             )
         )
     return found

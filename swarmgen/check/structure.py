@@ -43,28 +43,25 @@ def _region_initial(machine: Machine, region: Region, needs_initial: bool) -> li
     initials = initial_of(region)
     if len(initials) > 1:
         return [
-            dg.diag(
-                dg.DUPLICATE_INITIAL,
-                f"region '{region.name or machine.name}' has {len(initials)} initial pseudostates",
+            dg.DUPLICATE_INITIAL.at(
                 initials[1].span,
-                notes=[f"the first is at {initials[0].span.location()}"],
-                hint="keep one initial pseudostate per region",
+                notes=[dg.DUPLICATE_INITIAL.note("first-at", where=initials[0].span.location())],
+                region=region.name or machine.name,
+                count=len(initials),
             )
         ]
     states = [v for v in region.vertices if isinstance(v, State | FinalState)]
     if not initials and states and needs_initial:
         return [
-            dg.diag(
-                dg.MISSING_INITIAL,
-                f"region '{region.name or machine.name}' has states but no initial pseudostate",
-                region.span,
-                hint=f"add an initial pseudostate with a transition to the first state (e.g. '{states[0].name}')",
+            dg.MISSING_INITIAL.at(
+                region.span, region=region.name or machine.name, first=states[0].name
             )
         ]
     return []
 
 
 def check_pseudostates(model: Model) -> list[Diagnostic]:
+    """Report finals with outgoing transitions and misused pseudostates."""
     found: list[Diagnostic] = []
     for machine in model.machines:
         leaving = outgoing(machine)
@@ -72,14 +69,7 @@ def check_pseudostates(model: Model) -> list[Diagnostic]:
             vertex = placed.vertex
             out = leaving.get(vertex.id, [])
             if isinstance(vertex, FinalState) and out:
-                found.append(
-                    dg.diag(
-                        dg.FINAL_WITH_OUTGOING,
-                        f"transition leaves final state '{vertex.name}'",
-                        out[0].span,
-                        hint="a final state ends its region; use an ordinary state instead",
-                    )
-                )
+                found.append(dg.FINAL_WITH_OUTGOING.at(out[0].span, state=vertex.name))
             if isinstance(vertex, Pseudostate):
                 found.extend(_pseudostate_rules(vertex, out))
     return found
@@ -89,41 +79,17 @@ def _pseudostate_rules(vertex: Pseudostate, out: list[Transition]) -> list[Diagn
     label = f"{vertex.kind.value} '{vertex.name}'" if vertex.name else vertex.kind.value
     if vertex.kind == PseudoKind.INITIAL:
         if len(out) != 1:
-            return [
-                dg.diag(
-                    dg.BAD_INITIAL_TRANSITION,
-                    f"{label} has {len(out)} outgoing transitions; it needs exactly one",
-                    vertex.span,
-                )
-            ]
+            return [dg.BAD_INITIAL_TRANSITION.at(vertex.span, label=label, count=len(out))]
         if out[0].triggers or out[0].guard is not None:
-            return [
-                dg.diag(
-                    dg.BAD_INITIAL_TRANSITION,
-                    f"the transition from {label} has a trigger or guard",
-                    out[0].span,
-                    hint="an initial transition fires at once; move the trigger to the next transition",
-                )
-            ]
+            return [dg.BAD_INITIAL_TRANSITION.at(out[0].span, "trigger", label=label)]
     if vertex.kind in _TRANSIENT and not out:
-        return [dg.diag(dg.BAD_PSEUDOSTATE, f"{label} has no outgoing transition", vertex.span)]
+        return [dg.BAD_PSEUDOSTATE.at(vertex.span, "no-outgoing", label=label)]
     if vertex.kind in _TRANSIENT | {PseudoKind.JOIN}:
         with_triggers = [t for t in out if t.triggers]
         if with_triggers:
-            return [
-                dg.diag(
-                    dg.BAD_PSEUDOSTATE,
-                    f"a transition leaving {label} has a trigger",
-                    with_triggers[0].span,
-                    hint="transitions out of choice, junction, fork and join pseudostates fire at once",
-                )
-            ]
+            return [dg.BAD_PSEUDOSTATE.at(with_triggers[0].span, "trigger", label=label)]
     if vertex.kind in {PseudoKind.SHALLOW_HISTORY, PseudoKind.DEEP_HISTORY} and len(out) > 1:
-        return [
-            dg.diag(
-                dg.BAD_PSEUDOSTATE, f"{label} has more than one default transition", vertex.span
-            )
-        ]
+        return [dg.BAD_PSEUDOSTATE.at(vertex.span, "several-defaults", label=label)]
     return []
 
 
@@ -137,14 +103,7 @@ def check_submachines(model: Model) -> list[Diagnostic]:
         if cycle and frozenset(cycle) not in reported:
             reported.add(frozenset(cycle))
             names = " -> ".join(index.machines[m].name for m in cycle)
-            found.append(
-                dg.diag(
-                    dg.SUBMACHINE_CYCLE,
-                    f"state machine '{machine.name}' contains itself: {names}",
-                    machine.span,
-                    hint="a submachine state must not (even indirectly) reuse the machine it belongs to",
-                )
-            )
+            found.append(dg.SUBMACHINE_CYCLE.at(machine.span, machine=machine.name, cycle=names))
     return found
 
 
@@ -176,24 +135,25 @@ def check_outcomes(model: Model) -> list[Diagnostic]:
                 call = state.activity if state is not None else None
                 if call is None:
                     found.append(
-                        dg.diag(
-                            dg.OUTCOME_WITHOUT_BEHAVIOUR,
-                            f"transition waits for outcome '{trigger.name}', but "
-                            f"'{_name_of(machine, transition.source)}' runs no behaviour",
+                        dg.OUTCOME_WITHOUT_BEHAVIOUR.at(
                             trigger.span,
-                            hint="give the state a doActivity, or use a triggerless (completion) transition",
+                            outcome=trigger.name,
+                            state=_name_of(machine, transition.source),
                         )
                     )
                     continue
                 behaviour = index.behaviours[call.behaviour]
                 if trigger.name not in behaviour.outcomes:
                     found.append(
-                        dg.diag(
-                            dg.UNKNOWN_OUTCOME,
-                            f"'{behaviour.name}' cannot end with outcome '{trigger.name}'",
+                        dg.UNKNOWN_OUTCOME.at(
                             trigger.span,
-                            notes=[f"its outcomes are: {', '.join(behaviour.outcomes)}"],
-                            hint="add the outcome to the behaviour's `outcomes` tag, or fix the trigger",
+                            notes=[
+                                dg.UNKNOWN_OUTCOME.note(
+                                    "outcomes", outcomes=", ".join(behaviour.outcomes)
+                                )
+                            ],
+                            behaviour=behaviour.name,
+                            outcome=trigger.name,
                         )
                     )
     return found

@@ -21,12 +21,12 @@ def check_counts(model: Model) -> list[Diagnostic]:
     summed count (`query.composition`) positive: an empty part is a mistake, not a no-op.
     A type's summed count is at most MAX_MEMBERS."""
     found = [
-        dg.diag(
-            dg.BAD_COUNT,
-            f"part '{part.name}' of swarm '{swarm.name}' has {part.count} member(s) "
-            f"of type '{part.type_name}'",
+        dg.BAD_COUNT.at(
             part.span,
-            hint="set the part's multiplicity to at least 1, or remove the part",
+            part=part.name,
+            swarm=swarm.name,
+            count=part.count,
+            type=part.type_name,
         )
         for swarm in model.swarms
         for part in swarm.members
@@ -49,16 +49,23 @@ def _too_many(model: Model) -> list[Diagnostic]:
             if part.type_name == type_name
         ]
         swarm, largest = max(parts, key=lambda sp: sp[1].count)
-        summed = f" in all (over {len(parts)} parts)" if len(parts) > 1 else ""
+        if len(parts) == 1:
+            found.append(
+                dg.TOO_MANY_MEMBERS.at(
+                    largest.span, swarm=swarm.name, total=total, type=type_name, limit=MAX_MEMBERS
+                )
+            )
+            continue
         found.append(
-            dg.diag(
-                dg.TOO_MANY_MEMBERS,
-                f"swarm '{swarm.name}' has {total:,} members of type '{type_name}'{summed}; "
-                f"the limit is {MAX_MEMBERS:,} per type",
+            dg.TOO_MANY_MEMBERS.at(
                 largest.span,
-                notes=[f"part '{largest.name}' has {largest.count:,}"] if summed else [],
-                hint="set the multiplicity to the swarm's real size; simulate sweeps sizes "
-                "with --members",
+                "summed",
+                notes=[dg.TOO_MANY_MEMBERS.note("part", part=largest.name, count=largest.count)],
+                swarm=swarm.name,
+                total=total,
+                type=type_name,
+                limit=MAX_MEMBERS,
+                parts=len(parts),
             )
         )
     return found
@@ -82,13 +89,15 @@ def check_ros_names(model: Model) -> list[Diagnostic]:
         )
         if other[0] != behaviour.name and other[1] != behaviour.ros.type:
             found.append(
-                dg.diag(
-                    dg.ROS_NAME_COLLISION,
-                    f"behaviours '{other[0]}' and '{behaviour.name}' both use the ROS name "
-                    f"'{behaviour.ros.name}' with different types",
+                dg.ROS_NAME_COLLISION.at(
                     behaviour.span,
-                    notes=[f"'{other[0]}' is at {other[2].location()}"],
-                    hint="give one of them another rosName",
+                    "types",
+                    notes=[
+                        dg.ROS_NAME_COLLISION.note("at", name=other[0], where=other[2].location())
+                    ],
+                    other=other[0],
+                    behaviour=behaviour.name,
+                    ros=behaviour.ros.name,
                 )
             )
     return found
@@ -101,12 +110,15 @@ def _collisions(what: str, items: Iterable[tuple[str, str, Span]]) -> list[Diagn
         other = first.setdefault(ros, (name, span))
         if other[0] != name:
             found.append(
-                dg.diag(
-                    dg.ROS_NAME_COLLISION,
-                    f"{what} '{other[0]}' and '{name}' both become the ROS name '{ros}'",
+                dg.ROS_NAME_COLLISION.at(
                     span,
-                    notes=[f"'{other[0]}' is at {other[1].location()}"],
-                    hint="rename one of them",
+                    notes=[
+                        dg.ROS_NAME_COLLISION.note("at", name=other[0], where=other[1].location())
+                    ],
+                    what=what,
+                    other=other[0],
+                    name=name,
+                    ros=ros,
                 )
             )
     return found

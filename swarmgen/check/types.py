@@ -24,6 +24,7 @@ _WORDS = {"number": "a number", "bool": "a boolean", "string": "a string", "null
 
 
 def category(type_name: str | None, datatypes: set[str]) -> str | None:
+    """The type class (number, bool, string, a datatype) of a property type; None if unknown."""
     if type_name is None:
         return None
     lowered = type_name.lower()
@@ -129,6 +130,7 @@ def _compatible(target: str | None, value: str | None) -> bool:
 
 
 def check_types(model: Model) -> list[Diagnostic]:
+    """Report guards, actions and bindings whose operand types certainly do not fit."""
     index = ModelIndex(model)
     datatypes = {d.name for d in model.datatypes}
     datatype_fields = {
@@ -218,7 +220,7 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
 
 
 def _report(errors: list[str], span: Span) -> list[Diagnostic]:
-    return [dg.diag(dg.TYPE_ERROR, f"type error: {message}", span) for message in _unique(errors)]
+    return [dg.TYPE_ERROR.at(span, error=message) for message in _unique(errors)]
 
 
 def _unique(items: list[str]) -> Iterator[str]:

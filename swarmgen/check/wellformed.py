@@ -102,6 +102,7 @@ class _Machine:
 
 
 def check_wellformed(model: Model) -> list[Diagnostic]:
+    """Report vertices and regions the lowering would turn into wrong output."""
     found: list[Diagnostic] = []
     for machine in model.machines:
         m = _Machine(machine)
@@ -128,12 +129,7 @@ def _pseudostate_rules(m: _Machine, placed: Placed, vertex: Pseudostate) -> list
         return _branching(m, vertex)
     if vertex.kind == PseudoKind.TERMINATE and m.leaving.get(vertex.id):
         return [
-            dg.diag(
-                dg.BAD_PSEUDOSTATE,
-                f"a transition leaves {_label(vertex)}; a terminate pseudostate ends the machine",
-                m.leaving[vertex.id][0].span,
-                hint="remove the transition, or use a state instead of the terminate pseudostate",
-            )
+            dg.BAD_PSEUDOSTATE.at(m.leaving[vertex.id][0].span, "terminate", label=_label(vertex))
         ]
     return []
 
@@ -153,14 +149,13 @@ def _into_initial(m: _Machine) -> list[Diagnostic]:
             and isinstance(placed.vertex, Pseudostate)
             and placed.vertex.kind == PseudoKind.INITIAL
         ):
-            itself = " (itself)" if transition.source == transition.target else ""
+            variant = "itself" if transition.source == transition.target else dg.DEFAULT
             found.append(
-                dg.diag(
-                    dg.ENTERS_INITIAL,
-                    f"a transition from '{m.name(transition.source)}' targets the initial "
-                    f"pseudostate '{m.name(transition.target)}'{itself}; nothing may enter one",
+                dg.ENTERS_INITIAL.at(
                     transition.span,
-                    hint="target the state the initial pseudostate leads to, or the region's state",
+                    variant,
+                    source=m.name(transition.source),
+                    target=m.name(transition.target),
                 )
             )
     return found
@@ -180,13 +175,12 @@ def _default_target(m: _Machine, vertex: Pseudostate, region: Region) -> list[Di
         if into_initial or m.inside(transition.target, region):
             continue  # an initial target is SG143's
         found.append(
-            dg.diag(
-                dg.INITIAL_LEAVES_REGION,
-                f"the {vertex.kind.value} transition of region '{region.name}' targets "
-                f"'{m.name(transition.target)}', which is not in that region",
+            dg.INITIAL_LEAVES_REGION.at(
                 transition.span,
-                notes=["it would leave another state of the region active beside it"],
-                hint=f"target a state of region '{region.name}' (or one nested in it)",
+                notes=[dg.INITIAL_LEAVES_REGION.note("leaves-active")],
+                kind=vertex.kind.value,
+                region=region.name,
+                target=m.name(transition.target),
             )
         )
     return found
@@ -195,16 +189,7 @@ def _default_target(m: _Machine, vertex: Pseudostate, region: Region) -> list[Di
 def _fork(m: _Machine, vertex: Pseudostate) -> list[Diagnostic]:
     out = m.leaving.get(vertex.id, [])
     label = _label(vertex)
-    found = [
-        dg.diag(
-            dg.BAD_FORK,
-            f"a transition leaving {label} has a guard; all branches of a fork fire together",
-            t.span,
-            hint="move the guard to the transition that enters the fork",
-        )
-        for t in out
-        if t.guard is not None
-    ]
+    found = [dg.BAD_FORK.at(t.span, "guard", label=label) for t in out if t.guard is not None]
     if len(out) == 1:
         found.append(_single(label, "outgoing", out[0].span))
     found += _orthogonal(m, label, "targets", [t.target for t in out], [t.span for t in out])
@@ -217,23 +202,13 @@ def _join(m: _Machine, vertex: Pseudostate) -> list[Diagnostic]:
     into = m.arriving.get(vertex.id, [])
     found = []
     if len(out) != 1:
-        found.append(
-            dg.diag(
-                dg.BAD_JOIN,
-                f"{label} has {len(out)} outgoing transitions; it needs exactly one",
-                vertex.span,
-                hint="give the join one transition to the state entered when all branches end",
-            )
-        )
+        found.append(dg.BAD_JOIN.at(vertex.span, "outgoing", label=label, count=len(out)))
     for transition in into:
         source = m.placed.get(transition.source)
         if source is None or not isinstance(source.vertex, State):
             found.append(
-                dg.diag(
-                    dg.BAD_JOIN,
-                    f"{label} is entered from '{m.name(transition.source)}', which is not a "
-                    "state: a join waits for states of orthogonal regions to be active",
-                    transition.span,
+                dg.BAD_JOIN.at(
+                    transition.span, "not-from-state", label=label, source=m.name(transition.source)
                 )
             )
     if len(into) == 1:
@@ -243,12 +218,7 @@ def _join(m: _Machine, vertex: Pseudostate) -> list[Diagnostic]:
 
 
 def _single(label: str, direction: str, span: Span) -> Diagnostic:
-    return dg.diag(
-        dg.SINGLE_BRANCH,
-        f"{label} has a single {direction} transition; it synchronises nothing",
-        span,
-        hint="use an ordinary transition, or add the branch of the other region",
-    )
+    return dg.SINGLE_BRANCH.at(span, label=label, direction=direction)
 
 
 def _orthogonal(
@@ -259,15 +229,16 @@ def _orthogonal(
     if pair is None:
         return []
     i, j = pair
+    code = dg.BAD_FORK if what == "targets" else dg.BAD_JOIN
     return [
-        dg.diag(
-            dg.BAD_FORK if what == "targets" else dg.BAD_JOIN,
-            f"the {what} '{m.name(ends[i])}' and '{m.name(ends[j])}' of {label} are not in "
-            "different regions of one parallel state",
+        code.at(
             spans[j],
-            notes=[f"the other transition is at {spans[i].location()}"],
-            hint=f"the {what} of a fork or join must lie in orthogonal regions "
-            "(one per region) of the same composite state",
+            "not-orthogonal",
+            notes=[code.note("other-at", where=spans[i].location())],
+            what=what,
+            first=m.name(ends[i]),
+            second=m.name(ends[j]),
+            label=label,
         )
     ]
 
@@ -278,14 +249,12 @@ def _branching(m: _Machine, vertex: Pseudostate) -> list[Diagnostic]:
     out = m.leaving.get(vertex.id, [])
     if not out or any(_always(t) for t in out):
         return []  # no way out at all is SG116
+    guards = [t.guard_text or "?" for t in out]
     return [
-        dg.diag(
-            dg.CHOICE_WITHOUT_ELSE,
-            f"{_label(vertex)} has guards on every outgoing "
-            "transition: when none holds, it would stay active as if it were a state",
+        dg.CHOICE_WITHOUT_ELSE.at(
             vertex.span,
-            notes=[f"guards: {', '.join(t.guard_text or '?' for t in out)}"],
-            hint="add a transition with the guard `else` (or without a guard)",
+            notes=[dg.CHOICE_WITHOUT_ELSE.note("guards", guards=", ".join(guards))],
+            label=_label(vertex),
         )
     ]
 
@@ -303,13 +272,7 @@ def _kinds(m: _Machine) -> list[Diagnostic]:
     """An internal transition does not leave its state; one to another state was emitted as
     an external transition."""
     return [
-        dg.diag(
-            dg.BAD_INTERNAL,
-            f"the internal transition from '{m.name(t.source)}' targets '{m.name(t.target)}'; "
-            "an internal transition stays in its state",
-            t.span,
-            hint="make it external (kind omitted), or let it target its own source",
-        )
+        dg.BAD_INTERNAL.at(t.span, source=m.name(t.source), target=m.name(t.target))
         for t in m.machine.transitions
         if t.kind == "internal" and t.source != t.target
     ]
@@ -318,15 +281,7 @@ def _kinds(m: _Machine) -> list[Diagnostic]:
 def _state_rules(m: _Machine, state: State) -> list[Diagnostic]:
     found = _region_names(state.name, state.regions)
     if state.submachine and state.regions:
-        found.append(
-            dg.diag(
-                dg.SUBMACHINE_WITH_REGIONS,
-                f"state '{state.name}' runs a submachine and also has regions of its own; "
-                "only the submachine's would be emitted",
-                state.span,
-                hint="move the regions into the submachine, or drop the submachine",
-            )
-        )
+        found.append(dg.SUBMACHINE_WITH_REGIONS.at(state.span, state=state.name))
     return found
 
 
@@ -340,12 +295,11 @@ def _region_names(owner: str, regions: Sequence[Region]) -> list[Diagnostic]:
         other = first.setdefault(region.name, region)
         if other is not region:
             found.append(
-                dg.diag(
-                    dg.DUPLICATE_REGION_NAME,
-                    f"'{owner}' has two regions named '{region.name}'",
+                dg.DUPLICATE_REGION_NAME.at(
                     region.span,
-                    notes=[f"the other is at {other.span.location()}"],
-                    hint="rename one of them",
+                    notes=[dg.DUPLICATE_REGION_NAME.note("other-at", where=other.span.location())],
+                    owner=owner,
+                    region=region.name,
                 )
             )
     return found

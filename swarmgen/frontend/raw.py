@@ -42,9 +42,11 @@ class RawElement:
 
     @property
     def name(self) -> str:
+        """The element's `name` attribute ('' when unnamed)."""
         return self.attrs.get("name", "")
 
     def kids(self, feature: str | None = None, uml_type: str | None = None) -> Iterator[RawElement]:
+        """Direct children, optionally only those of one feature and/or UML type."""
         for child in self.children:
             if (feature is None or child.feature == feature) and (
                 uml_type is None or child.uml_type == uml_type
@@ -52,9 +54,11 @@ class RawElement:
                 yield child
 
     def first(self, feature: str) -> RawElement | None:
+        """The first child of a feature, or None."""
         return next(self.kids(feature), None)
 
     def walk(self) -> Iterator[RawElement]:
+        """This element and all its descendants, depth first in document order."""
         stack: list[RawElement] = [self]
         while stack:
             element = stack.pop()
@@ -80,6 +84,8 @@ class StereotypeApplication:
 
 @dataclass
 class RawModel:
+    """A parsed XMI file: its root elements, the id index and the stereotype applications."""
+
     file: str
     roots: list[RawElement]
     index: dict[str, RawElement]
@@ -87,6 +93,7 @@ class RawModel:
     exporter: str  # "modelio", "eclipse-uml2", "papyrus", ... (informative)
 
     def elements(self) -> Iterator[RawElement]:
+        """Every element of every root, depth first in document order."""
         for root in self.roots:
             yield from root.walk()
 

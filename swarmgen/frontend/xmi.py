@@ -100,21 +100,19 @@ def _read_bounded(path: Path, shown: str) -> bytes:
     except InputRefused as err:
         if str(err).startswith("is larger than"):
             raise InputError(_too_large(path, span)) from None
-        raise InputError(dg.diag(dg.UNREADABLE, str(err), span)) from None
+        raise InputError(dg.UNREADABLE.at(span, error=str(err))) from None
     if not data.strip():
-        raise InputError(dg.diag(dg.UNREADABLE, "file is empty", span))
+        raise InputError(dg.UNREADABLE.at(span, "empty"))
     return data
 
 
 def _too_large(path: Path, span: Span) -> Diagnostic:
-    limit = f"the limit is {MAX_BYTES // 2**20} MiB"
+    limit = MAX_BYTES // 2**20
     try:
-        size = f"file is {path.stat().st_size / 2**20:.0f} MiB"
+        mib = path.stat().st_size / 2**20
     except OSError:
-        size = "file is too large"
-    return dg.diag(
-        dg.TOO_LARGE, f"{size}; {limit}", span, hint="split the model into smaller files"
-    )
+        return dg.TOO_LARGE.at(span, "file-unknown-size", limit=limit)
+    return dg.TOO_LARGE.at(span, "file", mib=mib, limit=limit)
 
 
 def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
@@ -140,11 +138,7 @@ def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
             name = message.partition(":")[2].strip()
             raise InputError(_bad_encoding(name, shown, _encoding_col(head))) from None
         raise InputError(
-            dg.diag(
-                dg.NOT_XML,
-                f"not well-formed XML: {message}",
-                Span(file=shown, line=line, col=max(col, 1)),
-            )
+            dg.NOT_XML.at(Span(file=shown, line=line, col=max(col, 1)), error=message)
         ) from None
     if tree.docinfo.internalDTD is not None:  # a DOCTYPE past the first 4 KiB
         raise InputError(_forbidden_dtd(shown, _line_of(text, b"<!DOCTYPE")))
@@ -152,12 +146,7 @@ def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
         include = next(tree.getroot().iter(f"{{{namespace}}}*"), None)
         if include is not None:
             raise InputError(
-                dg.diag(
-                    dg.FORBIDDEN_XML,
-                    "XInclude is not allowed in model files; the included file is not read",
-                    Span(file=shown, line=_line(include) or 1, col=1),
-                    hint="remove the xi:include element; a model is exported as one file",
-                )
+                dg.FORBIDDEN_XML.at(Span(file=shown, line=_line(include) or 1, col=1), "xinclude")
             )
     return tree
 
@@ -194,13 +183,10 @@ def _text_codec(name: str) -> codecs.CodecInfo | None:
 
 
 def _bad_encoding(name: str, shown: str, col: int) -> Diagnostic:
-    what = f"unsupported encoding {_quoted(name)}" if name.strip() else "an empty encoding name"
-    return dg.diag(
-        dg.NOT_XML,
-        f"the XML declaration names {what}",
-        Span(file=shown, line=1, col=max(col, 1)),
-        hint='save the model as UTF-8 (<?xml version="1.0" encoding="UTF-8"?>)',
-    )
+    span = Span(file=shown, line=1, col=max(col, 1))
+    if not name.strip():
+        return dg.NOT_XML.at(span, "empty-encoding")
+    return dg.NOT_XML.at(span, "encoding", encoding=_quoted(name))
 
 
 def _quoted(text: str, limit: int = 40) -> str:
@@ -240,12 +226,7 @@ def _ascii_compatible(data: bytes) -> bytes:
 
 
 def _forbidden_dtd(shown: str, line: int) -> Diagnostic:
-    return dg.diag(
-        dg.FORBIDDEN_XML,
-        "document type declarations and entities are not allowed in model files",
-        Span(file=shown, line=line, col=1),
-        hint="XMI exports never need a DTD; remove the <!DOCTYPE ...> block",
-    )
+    return dg.FORBIDDEN_XML.at(Span(file=shown, line=line, col=1))
 
 
 def _line_of(data: bytes, needle: bytes) -> int:
@@ -259,14 +240,7 @@ def _check_root(tree: etree._ElementTree, shown: str) -> None:
     uri = etree.QName(root).namespace or ""
     if local == "XMI" or (local in {"Model", "Package", "Profile"} and "UML" in uri.upper()):
         return
-    raise InputError(
-        dg.diag(
-            dg.NOT_XMI,
-            f"root element <{root.tag}> is not xmi:XMI or uml:Model",
-            Span(file=shown, line=_line(root) or 1, col=1),
-            hint="export the model from Modelio with File > Export > XMI",
-        )
-    )
+    raise InputError(dg.NOT_XMI.at(Span(file=shown, line=_line(root) or 1, col=1), tag=root.tag))
 
 
 def _build(root: etree._Element, ctx: _Context) -> RawModel:
@@ -337,14 +311,10 @@ def _make_element(
     ctx.count += 1
     line = _line(node)
     if depth > MAX_DEPTH or ctx.count > MAX_ELEMENTS:
-        limit = (
-            f"nesting deeper than {MAX_DEPTH}"
-            if depth > MAX_DEPTH
-            else f"more than {MAX_ELEMENTS} elements"
-        )
-        raise InputError(
-            dg.diag(dg.TOO_LARGE, f"model has {limit}", Span(file=ctx.file, line=line, col=1))
-        )
+        span = Span(file=ctx.file, line=line, col=1)
+        if depth > MAX_DEPTH:
+            raise InputError(dg.TOO_LARGE.at(span, "depth", limit=MAX_DEPTH))
+        raise InputError(dg.TOO_LARGE.at(span, "elements", limit=MAX_ELEMENTS))
     qname = etree.QName(node)
     attrs: dict[str, str] = {}
     xmi_type = xmi_id = ""
@@ -378,12 +348,12 @@ def _attributes(node: etree._Element, ctx: _Context, line: int) -> list[tuple[st
     count = len(node.attrib)
     if count > MAX_ATTRIBUTES:
         raise InputError(
-            dg.diag(
-                dg.TOO_LARGE,
-                f"element <{_quoted(etree.QName(node).localname)[1:-1]}> has {count} attributes; "
-                f"the limit is {MAX_ATTRIBUTES} per element",
+            dg.TOO_LARGE.at(
                 Span(file=ctx.file, line=line, col=_column(node, line, ctx)),
-                hint="XMI exports use a few attributes per element; this file was not exported",
+                "attributes",
+                element=_quoted(etree.QName(node).localname)[1:-1],
+                count=count,
+                limit=MAX_ATTRIBUTES,
             )
         )
     return [(str(k), str(v)) for k, v in node.attrib.items()]
@@ -426,15 +396,8 @@ def _register(element: RawElement, ctx: _Context) -> None:
     if first is None:
         ctx.index[element.id] = element
         return
-    ctx.diagnostics.append(
-        dg.diag(
-            dg.DUPLICATE_ID,
-            f"xmi:id '{element.id}' is used twice",
-            element.span,
-            notes=[f"first used at {first.span.location()}"],
-            hint="ids must be unique; re-export the model or rename one id",
-        )
-    )
+    note = dg.DUPLICATE_ID.note("first-used", where=first.span.location())
+    ctx.diagnostics.append(dg.DUPLICATE_ID.at(element.span, notes=[note], id=element.id))
 
 
 def _is_reference(node: etree._Element) -> bool:
@@ -481,15 +444,8 @@ def _stereotype(node: etree._Element, ctx: _Context) -> StereotypeApplication:
             ctx.index[xmi_id].span if xmi_id in ctx.index else None
         )
         if first is not None:
-            ctx.diagnostics.append(
-                dg.diag(
-                    dg.DUPLICATE_ID,
-                    f"xmi:id '{xmi_id}' is used twice",
-                    span,
-                    notes=[f"first used at {first.location()}"],
-                    hint="ids must be unique; re-export the model or rename one id",
-                )
-            )
+            note = dg.DUPLICATE_ID.note("first-used", where=first.location())
+            ctx.diagnostics.append(dg.DUPLICATE_ID.at(span, notes=[note], id=xmi_id))
         ctx.stereotype_ids.setdefault(xmi_id, span)
     name = qname.localname.rsplit(".", 1)[-1]
     return StereotypeApplication(name, qname.namespace or "", tuple(bases), tags, span)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import PurePosixPath
 
-from swarmgen.graph import dot, mermaid, view
+from swarmgen.graph import dot, mermaid, structure, view
 from swarmgen.graph.dot import GraphvizError
 from swarmgen.graph.view import GraphError
 from swarmgen.ir.nodes import Machine, MemberType, Model
@@ -43,17 +43,17 @@ def files(model: Model, fmt: str = "mermaid", member: str | None = None) -> File
         raise GraphError(f"unknown diagram format '{fmt}'; choose one of: {', '.join(FORMATS)}")
     machines, chosen = select(model, member)
     diagrams = view.diagrams(model, machines)
-    comp = view.composition(model, chosen)
+    comp = structure.composition(model, chosen)
     out: Files = {}
     if fmt == "mermaid":
         for diagram in diagrams:
             out[PurePosixPath(diagram.stem + mermaid.SUFFIX)] = mermaid.state_diagram(diagram)
-        out[PurePosixPath(view.COMPOSITION_STEM + mermaid.SUFFIX)] = mermaid.composition(comp)
+        out[PurePosixPath(structure.COMPOSITION_STEM + mermaid.SUFFIX)] = mermaid.composition(comp)
         return out
     link = dot.SVG_SUFFIX if fmt == "svg" else dot.SUFFIX
     for diagram in diagrams:
         out[PurePosixPath(diagram.stem + dot.SUFFIX)] = dot.state_diagram(diagram, link)
-    out[PurePosixPath(view.COMPOSITION_STEM + dot.SUFFIX)] = dot.composition(comp)
+    out[PurePosixPath(structure.COMPOSITION_STEM + dot.SUFFIX)] = dot.composition(comp)
     if fmt == "svg":
         return {path.with_suffix(dot.SVG_SUFFIX): dot.svg(text) for path, text in out.items()}
     return out

@@ -14,8 +14,11 @@ import shutil
 import subprocess
 from collections.abc import Iterable
 
-from swarmgen.graph import view
-from swarmgen.graph.view import Composition, Diagram, GraphError, NodeKind, Shape, Style, Vertex
+from swarmgen.graph import structure, styles, view
+from swarmgen.graph.structure import Composition, NodeKind
+from swarmgen.graph.styles import Style
+from swarmgen.graph.view import Diagram, GraphError, Shape, Vertex
+from swarmgen.ir.nodes import PseudoKind
 from swarmgen.names import IdAllocator
 
 SUFFIX = ".dot"
@@ -120,7 +123,7 @@ class _StateWriter:
 
     def cluster(self, v: Vertex, depth: int) -> None:
         pad = INDENT * depth
-        style = view.BEHAVIOUR_STYLES[v.kind] if v.kind else view.COMPOSITE
+        style = styles.BEHAVIOUR_STYLES[v.kind] if v.kind else styles.COMPOSITE
         attrs = _attrs(
             label=_label([v.name, *v.lines]), labeljust="l", style='"rounded,filled"',
             penwidth="1.2", **_colours(style),
@@ -141,7 +144,7 @@ class _StateWriter:
                 self.lines.append(f"{inner}subgraph {quote('cluster_' + region.id)} {{")
                 region_attrs = _attrs(
                     label=quote(region.name), labeljust="l", style='"dashed,rounded"',
-                    color=quote(view.REGION.stroke), fontsize="10",
+                    color=quote(styles.REGION.stroke), fontsize="10",
                 )  # fmt: skip
                 self.lines.append(f"{inner}{INDENT}graph {region_attrs};")
                 for vertex in region.vertices:
@@ -177,7 +180,7 @@ class _StateWriter:
             "fontsize=10];"
         )
         for kind in kinds:
-            style = view.BEHAVIOUR_STYLES[kind]
+            style = styles.BEHAVIOUR_STYLES[kind]
             lid = self.ids.claim(f"legend_{kind.value}")
             attrs = _attrs(label=quote(style.title), fontsize="9", **_colours(style))
             self.lines.append(f"{INDENT * 2}{quote(lid)} {attrs};")
@@ -188,7 +191,7 @@ def _vertex_attrs(v: Vertex, link_suffix: str) -> dict[str, str]:
     small = {"fixedsize": "true", "label": '""'}
     match v.shape:
         case Shape.STATE:
-            style = view.BEHAVIOUR_STYLES[v.kind] if v.kind else view.NEUTRAL
+            style = styles.BEHAVIOUR_STYLES[v.kind] if v.kind else styles.NEUTRAL
             attrs = {"label": _label([v.name, *v.lines]), **_colours(style)}
             if v.link is not None:
                 attrs["style"] = '"rounded,filled,bold"'
@@ -198,30 +201,30 @@ def _vertex_attrs(v: Vertex, link_suffix: str) -> dict[str, str]:
             return {"shape": "doublecircle", "style": "filled", "fillcolor": '"#333333"',
                     "color": '"#333333"', "width": "0.2", "height": "0.2", "xlabel": quote(v.name),
                     **small}  # fmt: skip
-        case Shape.INITIAL:
+        case PseudoKind.INITIAL:
             return {"shape": "point", "style": "filled", "fillcolor": '"#000000"',
                     "color": '"#000000"', "width": "0.15", "height": "0.15", **small}  # fmt: skip
-        case Shape.CHOICE:
+        case PseudoKind.CHOICE:
             return {"shape": "diamond", "style": "filled", "fillcolor": '"#ffffff"',
                     "color": '"#333333"', "width": "0.3", "height": "0.3", "xlabel": quote(v.name),
                     **small}  # fmt: skip
-        case Shape.JUNCTION:
+        case PseudoKind.JUNCTION:
             return {"shape": "circle", "style": "filled", "fillcolor": '"#000000"',
                     "width": "0.12", "height": "0.12", "xlabel": quote(v.name), **small}  # fmt: skip
-        case Shape.FORK | Shape.JOIN:
+        case PseudoKind.FORK | PseudoKind.JOIN:
             return {"shape": "box", "style": "filled", "fillcolor": '"#000000"',
                     "width": "0.6", "height": "0.06", **small}  # fmt: skip
-        case Shape.SHALLOW_HISTORY | Shape.DEEP_HISTORY:
-            mark = "H*" if v.shape == Shape.DEEP_HISTORY else "H"
+        case PseudoKind.SHALLOW_HISTORY | PseudoKind.DEEP_HISTORY:
+            mark = "H*" if v.shape == PseudoKind.DEEP_HISTORY else "H"
             return {"shape": "circle", "style": "filled", "fillcolor": '"#ffffff"',
                     "color": '"#333333"', "width": "0.3", "height": "0.3", "fixedsize": "true",
                     "fontsize": "9", "label": quote(mark), "xlabel": quote(v.name)}  # fmt: skip
-        case Shape.TERMINATE:
+        case PseudoKind.TERMINATE:
             return {"shape": "circle", "style": "filled", "fillcolor": '"#ffffff"',
                     "width": "0.25", "height": "0.25", "fixedsize": "true", "fontsize": "10",
                     "label": '"X"', "xlabel": quote(v.name)}  # fmt: skip
-        case Shape.ENTRY_POINT | Shape.EXIT_POINT:
-            mark = '"\u00d7"' if v.shape == Shape.EXIT_POINT else '""'
+        case PseudoKind.ENTRY_POINT | PseudoKind.EXIT_POINT:
+            mark = '"\u00d7"' if v.shape == PseudoKind.EXIT_POINT else '""'
             return {"shape": "circle", "style": "filled", "fillcolor": '"#ffffff"',
                     "color": '"#333333"', "width": "0.2", "height": "0.2", "fixedsize": "true",
                     "fontsize": "9", "label": mark, "xlabel": quote(v.name)}  # fmt: skip
@@ -233,8 +236,9 @@ def state_diagram(diagram: Diagram, link_suffix: str = SVG_SUFFIX) -> str:
 
 
 def composition(comp: Composition) -> str:
+    """The DOT digraph of the swarm composition and hardware."""
     lines = [
-        f"digraph {quote(view.COMPOSITION_STEM)} {{",
+        f"digraph {quote(structure.COMPOSITION_STEM)} {{",
         f"{INDENT}graph [label={_label([comp.name, 'swarm composition and hardware'])}, "
         f'labelloc=t, fontname="{FONT}", fontsize=13, rankdir=LR, nodesep=0.3, ranksep=0.7];',
         f'{INDENT}node [fontname="{FONT}", fontsize=11, shape=box, style="filled", '
@@ -245,11 +249,11 @@ def composition(comp: Composition) -> str:
         head = [f"«{box.stereotype}»"] if box.stereotype else []
         attrs = {"label": _label([*head, box.name, *box.lines])}
         if box.hardware is not None:
-            attrs.update(_colours(view.HARDWARE_STYLES[box.hardware]))
+            attrs.update(_colours(styles.HARDWARE_STYLES[box.hardware]))
         elif box.kind == NodeKind.SWARM:
             attrs["penwidth"] = "2"
         elif box.kind == NodeKind.CLASS:
-            attrs["color"] = quote(view.CLASS_STYLE.stroke)
+            attrs["color"] = quote(styles.CLASS_STYLE.stroke)
         lines.append(f"{INDENT}{quote(box.id)} {_attrs(**attrs)};")
     for link in comp.links:
         if link.generalisation:

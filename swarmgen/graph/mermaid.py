@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import re
 
-from swarmgen.graph import view
-from swarmgen.graph.view import Composition, Diagram, Edge, NodeKind, Shape, Style, Vertex
-from swarmgen.ir.nodes import BehaviourKind, HardwareKind
+from swarmgen.graph import labels, styles, view
+from swarmgen.graph.structure import Composition, NodeKind
+from swarmgen.graph.styles import Style
+from swarmgen.graph.view import Diagram, Edge, Shape, Vertex
+from swarmgen.ir.nodes import BehaviourKind, HardwareKind, PseudoKind
 from swarmgen.names import IdAllocator
 
 SUFFIX = ".mmd"
@@ -90,7 +92,7 @@ class _StateWriter:
         entered = {e.target for e in self.d.edges}
         starts = set()
         for v in self.vertex.values():
-            if v.shape != Shape.INITIAL or v.id not in self.d.region_of:
+            if v.shape != PseudoKind.INITIAL or v.id not in self.d.region_of:
                 continue
             region = self.d.region_of[v.id]
             out = leaving.get(v.id, [])
@@ -108,7 +110,7 @@ class _StateWriter:
         d = self.d
         members = f" (run by {', '.join(d.members)})" if d.members else ""
         self.lines += [
-            f"%% swarmgen: state machine {text(view.clip(d.name, 80))}{text(members)}",
+            f"%% swarmgen: state machine {text(labels.clip(d.name, 80))}{text(members)}",
             "stateDiagram-v2",
         ]
         local: dict[str, list[Edge]] = {}
@@ -152,11 +154,11 @@ class _StateWriter:
         if v.id in self.starts:
             return
         match v.shape:
-            case Shape.CHOICE | Shape.JUNCTION:
+            case PseudoKind.CHOICE | PseudoKind.JUNCTION:
                 self.lines.append(f"{pad}state {mid} <<choice>>")
-            case Shape.FORK:
+            case PseudoKind.FORK:
                 self.lines.append(f"{pad}state {mid} <<fork>>")
-            case Shape.JOIN:
+            case PseudoKind.JOIN:
                 self.lines.append(f"{pad}state {mid} <<join>>")
             case Shape.STATE:
                 self.state(v, depth)
@@ -199,15 +201,15 @@ class _StateWriter:
         self.lines.append(f"{INDENT}state {lid} {{")
         for kind in kinds:
             kid = self.ids.claim(f"legend_{BEHAVIOUR_CLASSES[kind]}")
-            self.lines.append(f'{INDENT * 2}state "{view.BEHAVIOUR_STYLES[kind].title}" as {kid}')
+            self.lines.append(f'{INDENT * 2}state "{styles.BEHAVIOUR_STYLES[kind].title}" as {kid}')
             self.classes.setdefault(BEHAVIOUR_CLASSES[kind], []).append(kid)
         self.lines.append(f"{INDENT}}}")
 
     def styles(self) -> None:
         defs = {
-            **{BEHAVIOUR_CLASSES[k]: _style(s) for k, s in view.BEHAVIOUR_STYLES.items()},
-            "plain": _style(view.NEUTRAL),
-            "final": _style(view.NEUTRAL, "3px"),
+            **{BEHAVIOUR_CLASSES[k]: _style(s) for k, s in styles.BEHAVIOUR_STYLES.items()},
+            "plain": _style(styles.NEUTRAL),
+            "final": _style(styles.NEUTRAL, "3px"),
             "pseudo": "fill:#ffffff,stroke:#333333,stroke-width:1px,color:#000000",
         }
         for name, style in defs.items():
@@ -222,28 +224,30 @@ def _pseudo_label(v: Vertex) -> str:
     match v.shape:
         case Shape.FINAL:
             return f"◉ {v.name}"
-        case Shape.INITIAL:
+        case PseudoKind.INITIAL:
             return "●"
-        case Shape.SHALLOW_HISTORY:
+        case PseudoKind.SHALLOW_HISTORY:
             return "H"
-        case Shape.DEEP_HISTORY:
+        case PseudoKind.DEEP_HISTORY:
             return "H*"
-        case Shape.TERMINATE:
+        case PseudoKind.TERMINATE:
             return f"✕ {v.name}"
-        case Shape.ENTRY_POINT:
+        case PseudoKind.ENTRY_POINT:
             return f"▷ {v.name}"
         case _:
             return f"⊗ {v.name}"
 
 
 def state_diagram(diagram: Diagram) -> str:
+    """The Mermaid `stateDiagram-v2` of one machine's diagram."""
     return _StateWriter(diagram).write()
 
 
 def composition(comp: Composition) -> str:
+    """The Mermaid `flowchart` of the swarm composition and hardware."""
     ids = IdAllocator()
     mid = {box.id: ids.claim(box.id) for box in comp.boxes}
-    lines = [f"%% swarmgen: swarm composition and hardware of {text(view.clip(comp.name, 80))}"]
+    lines = [f"%% swarmgen: swarm composition and hardware of {text(labels.clip(comp.name, 80))}"]
     lines.append("flowchart LR")
     classes: dict[str, list[str]] = {}
     for box in comp.boxes:
@@ -260,10 +264,10 @@ def composition(comp: Composition) -> str:
         label = "is a" if link.generalisation else link.label
         lines.append(f'{INDENT}{mid[link.source]} {arrow}|"{text(label)}"| {mid[link.target]}')
     defs = {
-        "swarm": _style(view.SWARM_STYLE, "2px"),
-        "member": _style(view.MEMBER_STYLE),
-        **{HARDWARE_CLASSES[k]: _style(s) for k, s in view.HARDWARE_STYLES.items()},
-        "type": _style(view.CLASS_STYLE),
+        "swarm": _style(styles.SWARM_STYLE, "2px"),
+        "member": _style(styles.MEMBER_STYLE),
+        **{HARDWARE_CLASSES[k]: _style(s) for k, s in styles.HARDWARE_STYLES.items()},
+        "type": _style(styles.CLASS_STYLE),
     }
     for name, style in defs.items():
         if name in classes:

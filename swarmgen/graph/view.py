@@ -1,5 +1,5 @@
-"""What the diagrams show, independent of the output format: one `Diagram` per state machine and
-one `Composition` per model, computed once from the IR so that Mermaid and DOT agree.
+"""What the state machine diagrams show, independent of the output format: one `Diagram` per
+state machine, computed once from the IR so that Mermaid and DOT agree.
 
 Every text here is the model's own (raw, unescaped); each renderer escapes it for its format.
 Ids are safe identifiers (`[A-Za-z0-9_]`, from `names.identifier`), unique in their diagram and
@@ -8,70 +8,31 @@ allocated in model order, so the output is deterministic.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
 from swarmgen.errors import SwarmgenError
+from swarmgen.graph.labels import ACTIVITY_LIMIT, actions_text, clip, transition_label
+from swarmgen.graph.structure import COMPOSITION_STEM
+from swarmgen.graph.styles import BEHAVIOUR_STYLES
 from swarmgen.ir import expr
 from swarmgen.ir import nodes as ir
 from swarmgen.ir.query import ModelIndex, connection_owner
-from swarmgen.ir.query import composition as swarm_composition
-from swarmgen.names import IdAllocator, identifier, one_line
-
-COMPOSITION_STEM = "swarm"
-GUARD_LIMIT = 40
-EFFECT_LIMIT = 60
-TRIGGER_LIMIT = 40
-ACTIVITY_LIMIT = 48
+from swarmgen.names import IdAllocator, identifier
 
 
 class GraphError(SwarmgenError):
     """The diagrams cannot be drawn as asked (an unknown member type, Graphviz missing)."""
 
+    verbatim = True  # its messages list choices over several lines, written for the terminal
+
 
 class Shape(StrEnum):
+    """How a state is drawn; a pseudostate is drawn by its own `ir.PseudoKind`."""
+
     STATE = "state"
     FINAL = "final"
-    INITIAL = "initial"
-    CHOICE = "choice"
-    JUNCTION = "junction"
-    FORK = "fork"
-    JOIN = "join"
-    SHALLOW_HISTORY = "shallowHistory"
-    DEEP_HISTORY = "deepHistory"
-    TERMINATE = "terminate"
-    ENTRY_POINT = "entryPoint"
-    EXIT_POINT = "exitPoint"
-
-
-@dataclass(frozen=True)
-class Style:
-    fill: str
-    stroke: str
-    title: str  # the legend's words
-
-
-# Pastel fills with a darker border of the same hue, readable with black text.
-BEHAVIOUR_STYLES: dict[ir.BehaviourKind, Style] = {
-    ir.BehaviourKind.COMPLEX: Style("#f8cecc", "#b85450", "complex behaviour"),
-    ir.BehaviourKind.SWARM_BEHAVIOR: Style("#d5e8d4", "#82b366", "swarm behaviour"),
-    ir.BehaviourKind.SWARM_FUNCTION: Style("#dae8fc", "#6c8ebf", "swarm function"),
-    ir.BehaviourKind.HARDWARE_FUNCTION: Style("#fff2cc", "#d6b656", "hardware function"),
-}
-NEUTRAL = Style("#f5f5f5", "#666666", "no behaviour")
-COMPOSITE = Style("#ffffff", "#666666", "composite state")
-REGION = Style("#ffffff", "#999999", "region")
-
-HARDWARE_STYLES: dict[ir.HardwareKind, Style] = {
-    ir.HardwareKind.SENSOR: Style("#e1d5e7", "#9673a6", "sensor"),
-    ir.HardwareKind.ACTUATOR: Style("#ffe6cc", "#d79b00", "actuator"),
-    ir.HardwareKind.CONTROLLER: Style("#eeeeee", "#666666", "controller"),
-    ir.HardwareKind.COMMUNICATION_INTERFACE: Style("#d0eeee", "#3c8c8c", "communication interface"),
-}
-SWARM_STYLE = Style("#ffffff", "#333333", "swarm")
-MEMBER_STYLE = Style("#ffffff", "#333333", "member type")
-CLASS_STYLE = Style("#ffffff", "#999999", "class")
 
 
 # --- state machines
@@ -79,9 +40,11 @@ CLASS_STYLE = Style("#ffffff", "#999999", "class")
 
 @dataclass(frozen=True)
 class Vertex:
+    """A vertex as drawn: its shape, label lines and, for a composite, its regions and points."""
+
     id: str
     name: str  # the model's name
-    shape: Shape
+    shape: Shape | ir.PseudoKind
     kind: ir.BehaviourKind | None = None  # of the behaviour its doActivity runs
     lines: tuple[str, ...] = ()  # more label lines: `do ...`, `entry / ...`, `submachine ...`
     link: str | None = None  # stem of the submachine's diagram
@@ -90,11 +53,14 @@ class Vertex:
 
     @property
     def composite(self) -> bool:
+        """Whether the vertex is a composite state (drawn as a cluster)."""
         return bool(self.regions)
 
 
 @dataclass(frozen=True)
 class Region:
+    """A region of a composite state (or of the machine) and its vertices."""
+
     id: str
     name: str
     vertices: tuple[Vertex, ...]
@@ -102,17 +68,22 @@ class Region:
 
 @dataclass(frozen=True)
 class Edge:
+    """A transition as drawn: source and target ids and its label parts."""
+
     source: str
     target: str
     parts: tuple[str, ...]  # `event`, `[guard]`, `/ effect`: the parts that are there
 
     @property
     def label(self) -> str:
+        """The label parts as one line."""
         return " ".join(self.parts)
 
 
 @dataclass(frozen=True)
 class Diagram:
+    """Everything one state machine diagram shows, with the lookups renderers need."""
+
     stem: str  # file name without suffix, unique in the model
     name: str  # the machine's name
     members: tuple[str, ...]  # member types that run it (directly or as a submachine)
@@ -124,6 +95,7 @@ class Diagram:
     owner_of: dict[str, str | None] = field(default_factory=dict)  # region id -> composite id
 
     def all_regions(self) -> list[Region]:
+        """Every region, the top-level ones first."""
         found = list(self.regions)
         for vertex in self.vertices():
             found.extend(vertex.regions)
@@ -156,72 +128,6 @@ class Diagram:
             found.append(owner)
             region = self.region_of.get(owner)
         return found
-
-
-def clip(text: str, limit: int) -> str:
-    """One line, at most `limit` characters (an ellipsis marks the cut)."""
-    flat = " ".join(one_line(text).split())
-    return flat if len(flat) <= limit else flat[: limit - 1].rstrip() + "…"
-
-
-def _args_text(args: Sequence[expr.Arg]) -> str:
-    return ", ".join(f"{a.name} = {expr.to_text(a.value)}" for a in args)
-
-
-def action_text(action: expr.Action) -> str:
-    """An effect in the model's action language."""
-    match action:
-        case expr.Assign():
-            return f"{action.target} = {expr.to_text(action.value)}"
-        case expr.Raise() | expr.Send():
-            verb = "raise" if isinstance(action, expr.Raise) else "send"
-            args = f"({_args_text(action.args)})" if action.args else ""
-            return f"{verb} {action.event}{args}"
-
-
-def _actions_text(actions: Iterable[expr.Action], opaque: Iterable[ir.OpaqueCode]) -> str:
-    parts = [action_text(a) for a in actions]
-    parts += [f"<{o.language} code>" for o in opaque]
-    return "; ".join(parts)
-
-
-def trigger_text(trigger: ir.Trigger) -> str:
-    if trigger.kind == ir.TriggerKind.TIME and trigger.delay_ms is not None:
-        return f"after {trigger.delay_ms} ms"
-    if trigger.kind == ir.TriggerKind.ANY:
-        return "*"
-    return trigger.name
-
-
-def transition_label(transition: ir.Transition) -> tuple[str, ...]:
-    """`event`, `[guard]`, `/ effect` (the parts that are there), each one line and clipped."""
-    parts: list[str] = []
-    triggers = ", ".join(trigger_text(t) for t in transition.triggers)
-    if triggers:
-        parts.append(clip(triggers, TRIGGER_LIMIT))
-    guard = expr.to_text(transition.guard) if transition.guard is not None else None
-    guard = guard or transition.guard_text
-    if guard:
-        parts.append(f"[{clip(guard, GUARD_LIMIT)}]")
-    opaque = [o for o in transition.opaque if o.role == "effect"]
-    effect = _actions_text(transition.effect, opaque)
-    if effect:
-        parts.append(f"/ {clip(effect, EFFECT_LIMIT)}")
-    return tuple(parts)
-
-
-_PSEUDO_SHAPES = {
-    ir.PseudoKind.INITIAL: Shape.INITIAL,
-    ir.PseudoKind.CHOICE: Shape.CHOICE,
-    ir.PseudoKind.JUNCTION: Shape.JUNCTION,
-    ir.PseudoKind.FORK: Shape.FORK,
-    ir.PseudoKind.JOIN: Shape.JOIN,
-    ir.PseudoKind.SHALLOW_HISTORY: Shape.SHALLOW_HISTORY,
-    ir.PseudoKind.DEEP_HISTORY: Shape.DEEP_HISTORY,
-    ir.PseudoKind.TERMINATE: Shape.TERMINATE,
-    ir.PseudoKind.ENTRY_POINT: Shape.ENTRY_POINT,
-    ir.PseudoKind.EXIT_POINT: Shape.EXIT_POINT,
-}
 
 
 def machine_stems(model: ir.Model) -> dict[str, str]:
@@ -287,7 +193,7 @@ class _Builder:
         self.vertex_ids[pseudo.id] = vid
         if region is not None:
             self.region_of[vid] = region
-        return Vertex(vid, pseudo.name, _PSEUDO_SHAPES[pseudo.kind])
+        return Vertex(vid, pseudo.name, pseudo.kind)
 
     def vertex(self, vertex: ir.Vertex, region: str) -> Vertex:
         if isinstance(vertex, ir.Pseudostate):
@@ -322,7 +228,7 @@ class _Builder:
             lines.append(clip(f"do {name}({bindings})" if bindings else f"do {name}", 64))
         for role, actions in (("entry", state.entry), ("exit", state.exit)):
             opaque = [o for o in state.opaque if o.role == role]
-            text = _actions_text(actions, opaque)
+            text = actions_text(actions, opaque)
             if text:
                 lines.append(f"{role} / {clip(text, ACTIVITY_LIMIT)}")
         if state.submachine:
@@ -358,156 +264,3 @@ def diagrams(model: ir.Model, machines: Sequence[ir.Machine] | None = None) -> l
         for m in model.machines
         if chosen is None or m.id in chosen
     ]
-
-
-# --- swarm composition and hardware
-
-
-class NodeKind(StrEnum):
-    SWARM = "swarm"
-    MEMBER = "member"
-    HARDWARE = "hardware"
-    CLASS = "class"  # a general class that is not a hardware component
-
-
-@dataclass(frozen=True)
-class Box:
-    id: str
-    name: str
-    kind: NodeKind
-    stereotype: str | None = None  # «Swarm», «Sensor», ...
-    lines: tuple[str, ...] = ()
-    hardware: ir.HardwareKind | None = None
-
-
-@dataclass(frozen=True)
-class Link:
-    source: str
-    target: str
-    label: str
-    generalisation: bool = False  # else a composite part
-
-
-@dataclass(frozen=True)
-class Composition:
-    name: str  # the model's name
-    boxes: tuple[Box, ...]
-    links: tuple[Link, ...]
-
-    def hardware_kinds(self) -> list[ir.HardwareKind]:
-        shown = {b.hardware for b in self.boxes}
-        return [k for k in HARDWARE_STYLES if k in shown]
-
-
-def _part_label(part: ir.Part) -> str:
-    return part.name if part.count == 1 else f"{part.name} [{part.count}]"
-
-
-def _member_lines(model: ir.Model, member: ir.MemberType) -> tuple[str, ...]:
-    """Role, machine and, when several swarm parts have this type, the swarm's total of it
-    (`query.composition`, the count the backends and the simulator run): each part's arrow
-    shows only its own count. One part: no total line, its arrow says it."""
-    lines: list[str] = []
-    if member.role:
-        lines.append(f"role: {member.role}")
-    machine = ModelIndex(model).machines.get(member.machine or "")
-    if machine is not None:
-        lines.append(f"machine: {machine.name}")
-    parts = sum(p.type_name == member.name for s in model.swarms for p in s.members)
-    if parts > 1:
-        total = swarm_composition(model).get(member.name, 0)
-        lines.append(f"members: {total} ({parts} parts)")
-    return tuple(lines)
-
-
-def _shown_hardware(
-    model: ir.Model,
-    member: ir.MemberType | None,
-    by_id: dict[str, ir.HardwareComponent],
-    by_name: dict[str, ir.HardwareComponent],
-) -> list[ir.HardwareComponent]:
-    """Every hardware class, or with `member` its parts' classes and their ancestors."""
-    if member is None:
-        return list(model.hardware)
-    queue = [by_id[p.type_id] for p in member.hardware if p.type_id in by_id]
-    seen: set[str] = set()
-    while queue:
-        component = queue.pop(0)
-        if component.id in seen:
-            continue
-        seen.add(component.id)
-        queue.extend(by_name[g] for g in component.generals if g in by_name)
-    return [h for h in model.hardware if h.id in seen]
-
-
-def _generalisations(
-    shown: list[ir.HardwareComponent],
-    by_name: dict[str, ir.HardwareComponent],
-    box_of: dict[str, str],
-    ids: IdAllocator,
-    boxes: list[Box],
-    links: list[Link],
-) -> None:
-    """Generalisation links of the shown hardware; a general class that is no hardware
-    component gets a box of its own (appended after the others, in first-use order)."""
-    extra: dict[str, str] = {}
-    for component in shown:
-        for general in component.generals:
-            if general in by_name and by_name[general].id in box_of:
-                target = box_of[by_name[general].id]
-            else:
-                if general not in extra:
-                    extra[general] = ids.claim(f"type_{identifier(general, 'class')}")
-                    boxes.append(Box(extra[general], general, NodeKind.CLASS))
-                target = extra[general]
-            links.append(Link(box_of[component.id], target, "", generalisation=True))
-
-
-def composition(model: ir.Model, member: ir.MemberType | None = None) -> Composition:
-    """Swarms -> member types (with counts) -> hardware parts (with kinds) -> generalisations.
-    With `member`, only what concerns that member type."""
-    ids = IdAllocator()
-    members = [member] if member is not None else list(model.member_types)
-    member_ids = {m.id for m in members}
-    swarms = [
-        s for s in model.swarms if member is None or any(p.type_id in member_ids for p in s.members)
-    ]
-    by_id = {h.id: h for h in model.hardware}
-    by_name: dict[str, ir.HardwareComponent] = {}
-    for component in model.hardware:
-        by_name.setdefault(component.name, component)
-
-    shown = _shown_hardware(model, member, by_id, by_name)
-    boxes: list[Box] = []
-    links: list[Link] = []
-    box_of: dict[str, str] = {}
-    for swarm in swarms:
-        sid = ids.claim(f"swarm_{swarm.ident}")
-        box_of[swarm.id] = sid
-        boxes.append(Box(sid, swarm.name, NodeKind.SWARM, "Swarm"))
-    for m in members:
-        mid = ids.claim(f"member_{m.ident}")
-        box_of[m.id] = mid
-        boxes.append(Box(mid, m.name, NodeKind.MEMBER, "SwarmMember", _member_lines(model, m)))
-    for component in shown:
-        hid = ids.claim(f"hw_{component.ident}")
-        box_of[component.id] = hid
-        lines: list[str] = []
-        if component.communication_type:
-            lines.append(f"type: {component.communication_type}")
-        boxes.append(
-            Box(hid, component.name, NodeKind.HARDWARE, str(component.kind), tuple(lines),
-                component.kind)
-        )  # fmt: skip
-    _generalisations(shown, by_name, box_of, ids, boxes, links)
-    for swarm in swarms:
-        for part in swarm.members:
-            if part.type_id in box_of and part.type_id in member_ids:
-                links.append(Link(box_of[swarm.id], box_of[part.type_id], _part_label(part)))
-    for m in members:
-        for part in m.hardware:
-            if part.type_id in box_of:
-                links.append(Link(box_of[m.id], box_of[part.type_id], _part_label(part)))
-    # parts first, generalisations after: the order of the text follows the reading order
-    links.sort(key=lambda link: link.generalisation)
-    return Composition(model.name, tuple(boxes), tuple(links))

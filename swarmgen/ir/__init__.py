@@ -1,0 +1,1 @@
+"""The intermediate representation: nodes, expressions, the builder from the raw model, lookups."""

@@ -43,23 +43,11 @@ def class_cycles(raw: RawModel, elements: list[RawElement], hardware: set[str]) 
     for cycle in _cycles(generals):
         names = " -> ".join(e[1].name for e in [cycle[-1], *cycle])
         found.append(
-            dg.diag(
-                dg.GENERALISATION_CYCLE,
-                f"'{cycle[-1][1].name}' specialises itself: {names}",
-                cycle[0][0].span,
-                hint="remove one of these generalizations",
-            )
+            dg.GENERALISATION_CYCLE.at(cycle[0][0].span, name=cycle[-1][1].name, cycle=names)
         )
     for cycle in _cycles(parts):
         path = " -> ".join(f"{e[0].parent.name if e[0].parent else ''}.{e[0].name}" for e in cycle)
-        found.append(
-            dg.diag(
-                dg.COMPOSITION_CYCLE,
-                f"'{cycle[-1][1].name}' is a part of itself: {path} -> {cycle[-1][1].name}",
-                cycle[0][0].span,
-                hint="make one of these attributes a reference (aggregation none), or remove it",
-            )
-        )
+        found.append(dg.COMPOSITION_CYCLE.at(cycle[0][0].span, name=cycle[-1][1].name, cycle=path))
     return found
 
 

@@ -48,17 +48,15 @@ def actions_of(
         return ()
     if not _is_own_language(language):
         opaque.append(OpaqueCode(language=language, body=text, role=role, span=behaviour.span))
-        b.report(
-            dg.OPAQUE_CODE,
-            f"{what} in language '{language}' is kept as text but not executed: {short(text)}",
-            behaviour.span,
-            hint="write it in swarmgen's action language (no <language>) to have it run",
+        b.diags.append(
+            dg.OPAQUE_CODE.at(behaviour.span, what=what, language=language, text=short(text))
         )
         return ()
     try:
         return expr.parse_actions(text)
     except expr.ExprError as err:
-        b.report(dg.EFFECT_SYNTAX, f"{what} {quote_error(text, err)}", behaviour.span, err.hint)
+        error = quote_error(text, err)
+        b.diags.append(dg.EFFECT_SYNTAX.at(behaviour.span, what=what, error=error, hint=err.hint))
         return ()
 
 
@@ -73,34 +71,19 @@ def activity_call(
     if operation is None:
         if not element.ref_values("specification") and text.strip():
             opaque.append(OpaqueCode(language=language, body=text, role="do", span=element.span))
-            b.report(
-                dg.OPAQUE_CODE,
-                f"doActivity {short(text)} calls no library behaviour; kept as text, not executed",
-                element.span,
-                hint="set the doActivity's specification to a behaviour operation of the library",
-            )
+            b.diags.append(dg.OPAQUE_CODE.at(element.span, "no-behaviour", text=short(text)))
         return None
     behaviour = b.behaviours.get(operation.id or "")
     if behaviour is None:
-        b.report(
-            dg.UNKNOWN_BEHAVIOUR,
-            f"doActivity calls '{operation.name}', which is not a library behaviour",
-            element.span,
-            hint="apply «ComplexBehavior», «SwarmBehavior», «SwarmFunction» or «HardwareFunction» "
-            "to the operation",
-        )
+        b.diags.append(dg.UNKNOWN_BEHAVIOUR.at(element.span, operation=operation.name))
         return None
     bindings: tuple[expr.Binding, ...] = ()
     if text.strip():
         try:
             bindings = expr.parse_bindings(text)
         except expr.ExprError as err:
-            b.report(
-                dg.BINDING_ERROR,
-                f"argument binding {quote_error(text, err)}",
-                element.span,
-                err.hint,
-            )
+            error = quote_error(text, err)
+            b.diags.append(dg.BINDING_ERROR.at(element.span, error=error, hint=err.hint))
     return BehaviourCall(behaviour=behaviour.id, bindings=bindings, span=element.span)
 
 

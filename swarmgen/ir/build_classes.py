@@ -98,11 +98,8 @@ def _count(b: Builder, attribute: RawElement) -> int:
     # ASCII digits only: str.isdigit() also takes `²`, which int() refuses (an internal error)
     if INTEGER_TEXT.fullmatch(text) and text[0] not in "+-" and len(text) <= 18:
         return int(text)
-    b.report(
-        dg.BAD_MULTIPLICITY,
-        f"part '{attribute.name}' has multiplicity {short(text)}; a swarm needs a fixed count",
-        attribute.span,
-        hint="set the upper multiplicity to the number of members, e.g. 4",
+    b.diags.append(
+        dg.BAD_MULTIPLICITY.at(attribute.span, part=attribute.name, multiplicity=short(text))
     )
     return 1
 
@@ -142,12 +139,7 @@ def _classifier_machine(b: Builder, element: RawElement) -> str | None:
         return chosen.id
     owned = [e for e in element.kids("ownedBehavior") if e.uml_type == "StateMachine"]
     if not owned:
-        b.report(
-            dg.MEMBER_WITHOUT_MACHINE,
-            f"member type '{element.name}' owns no state machine, so it has no behaviour",
-            element.span,
-            hint="add a state machine to the class (its classifierBehavior)",
-        )
+        b.diags.append(dg.MEMBER_WITHOUT_MACHINE.at(element.span, member=element.name))
         return None
     return owned[0].id
 

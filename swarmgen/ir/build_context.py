@@ -23,7 +23,6 @@ from swarmgen.ir.nodes import (
     Value,
 )
 from swarmgen.names import identifier
-from swarmgen.span import Span
 
 HARDWARE_KINDS = {k.value: k for k in HardwareKind}
 BEHAVIOUR_KINDS = {k.value: k for k in BehaviourKind}
@@ -55,10 +54,8 @@ class Builder:
 
     # --- helpers
 
-    def report(self, code: dg.Code, message: str, span: Span, hint: str | None = None) -> None:
-        self.diags.append(dg.diag(code, message, span, hint=hint))
-
     def stereotype(self, element: RawElement, names: Iterable[str]) -> StereotypeApplication | None:
+        """The first application on `element` of one of the named stereotypes, if any."""
         wanted = set(names)
         apps = [a for a in self.stereo.get(element.id or "", []) if a.name in wanted]
         return apps[0] if apps else None
@@ -75,18 +72,23 @@ class Builder:
         return self._resolve(element, feature, values[0], kinds) if values else None
 
     def several(self, element: RawElement, feature: str, values: list[str]) -> None:
+        """Report several values of a single-valued reference."""
         shown = " ".join(values[:3]) + (" ..." if len(values) > 3 else "")
-        self.report(
-            dg.SEVERAL_REFS,
-            f"{element.uml_type or element.feature} {label(element)}: {feature} names "
-            f"{len(values)} elements ({shown}); it takes exactly one",
-            element.span,
-            hint=f"keep one id in {feature}",
+        self.diags.append(
+            dg.SEVERAL_REFS.at(
+                element.span,
+                kind=element.uml_type or element.feature,
+                label=label(element),
+                feature=feature,
+                count=len(values),
+                shown=shown,
+            )
         )
 
     def refs(
         self, element: RawElement, feature: str, kinds: set[str] | None = None
     ) -> list[RawElement]:
+        """Resolve a multi-valued reference, dropping (and reporting) the bad values."""
         found = (self._resolve(element, feature, v, kinds) for v in element.ref_values(feature))
         return [f for f in found if f is not None]
 
@@ -97,25 +99,32 @@ class Builder:
         if target is None:
             if _is_external(value):
                 return None
-            self.report(
-                dg.DANGLING_REF,
-                f"{element.uml_type or element.feature} '{element.name}': {feature} '{value}' "
-                "names no element of the model",
-                element.span,
-                hint="the referenced element was deleted or lives in a file that was not exported",
+            self.diags.append(
+                dg.DANGLING_REF.at(
+                    element.span,
+                    kind=element.uml_type or element.feature,
+                    name=element.name,
+                    feature=feature,
+                    value=value,
+                )
             )
             return None
         if kinds is not None and target.uml_type not in kinds:
-            self.report(
-                dg.WRONG_REF_KIND,
-                f"{feature} of '{element.name}' is a {target.uml_type or target.feature} "
-                f"'{target.name}', expected {' or '.join(sorted(kinds))}",
-                element.span,
+            self.diags.append(
+                dg.WRONG_REF_KIND.at(
+                    element.span,
+                    feature=feature,
+                    name=element.name,
+                    kind=target.uml_type or target.feature,
+                    target=target.name,
+                    expected=" or ".join(sorted(kinds)),
+                )
             )
             return None
         return target
 
     def type_name(self, element: RawElement) -> str | None:
+        """The name of the element's type: a model type or a primitive-library fragment."""
         values = element.ref_values("type")
         if len(values) > 1:
             self.several(element, "type", values)
@@ -131,6 +140,7 @@ class Builder:
         return None
 
     def prop(self, element: RawElement) -> Property:
+        """An attribute or parameter as a Property, with its checked default."""
         type_name = self.type_name(element)
         return Property(
             id=element.id or element.span.path,
@@ -153,48 +163,53 @@ class Builder:
             if bad is None:
                 return value
             value = bad
-        self.report(
-            dg.BAD_DEFAULT,
-            f"default value {short(literal_text(spec))} of '{element.name}' {value.problem}",
-            element.span,
-            hint=value.hint,
+        self.diags.append(
+            dg.BAD_DEFAULT.at(
+                element.span,
+                value=short(literal_text(spec)),
+                name=element.name,
+                problem=value.problem,
+                hint=value.hint,
+            )
         )
         return None
 
     # --- stereotypes
 
     def index_stereotypes(self) -> None:
+        """Index stereotype applications by base id, reporting unknown ones and tags."""
         for app in self.raw.stereotypes:
             known = KNOWN_STEREOTYPES.get(app.name)
             if known is None:
-                self.report(
-                    dg.UNKNOWN_STEREOTYPE,
-                    f"stereotype '{app.name}' is not part of the swarm profile; ignored",
-                    app.span,
-                )
+                self.diags.append(dg.UNKNOWN_STEREOTYPE.at(app.span, stereotype=app.name))
                 continue
             for tag in sorted(set(app.tags) - known):
-                self.report(dg.UNKNOWN_TAG, f"«{app.name}» has no tag '{tag}'; ignored", app.span)
+                self.diags.append(dg.UNKNOWN_TAG.at(app.span, stereotype=app.name, tag=tag))
             for base in app.base_ids:
                 if self.raw.resolve(base) is None:
-                    self.report(
-                        dg.DANGLING_REF,
-                        f"«{app.name}» is applied to '{base}', which names no element",
-                        app.span,
+                    self.diags.append(
+                        dg.DANGLING_REF.at(
+                            app.span, "stereotype-base", stereotype=app.name, base=base
+                        )
                     )
                 self.stereo.setdefault(base, []).append(app)
 
     def tag_choice(
         self, app: StereotypeApplication, tag: str, allowed: tuple[str, ...]
     ) -> str | None:
+        """A tag's value if it is one of `allowed` (reported otherwise); None when unset."""
         value = app.tags.get(tag, "").strip()
         if not value:
             return None
         if value not in allowed:
-            self.report(
-                dg.BAD_TAG_VALUE,
-                f"«{app.name}» {tag}='{value}' is not one of {', '.join(allowed)}",
-                app.span,
+            self.diags.append(
+                dg.BAD_TAG_VALUE.at(
+                    app.span,
+                    stereotype=app.name,
+                    tag=tag,
+                    value=value,
+                    allowed=", ".join(allowed),
+                )
             )
             return None
         return value

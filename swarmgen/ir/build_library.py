@@ -62,12 +62,10 @@ def _check_outcome_name(
     identifier are safe in every engine and in SMACH's outcome keys (docs/profile.md)."""
     if identifier(outcome) == outcome:
         return
-    b.report(
-        dg.BAD_OUTCOME_NAME,
-        f"outcome '{outcome}' of '{element.name}' is not a plain name: outcomes are matched as "
-        "SCXML event tokens, where '.' separates tokens and '*' matches any",
-        app.span,
-        hint=f"rename it to '{identifier(outcome)}' (letters, digits and '_', not a reserved word)",
+    b.diags.append(
+        dg.BAD_OUTCOME_NAME.at(
+            app.span, outcome=outcome, name=element.name, suggestion=identifier(outcome)
+        )
     )
 
 

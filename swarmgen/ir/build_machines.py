@@ -49,20 +49,25 @@ def read_machine(b: Builder, element: RawElement) -> Machine:
     )
 
 
-def _misplaced(b: Builder, element: RawElement, what: str, hint: str) -> None:
-    b.report(
-        dg.UNEXPECTED_ELEMENT,
-        f"{element.feature} {label(element)} is a {element.uml_type or 'element of unknown type'}, "
-        f"but {what}",
-        element.span,
-        hint=hint,
+def _misplaced(b: Builder, element: RawElement, variant: str, **values: str) -> None:
+    """Report an element that does not belong where it stands (SG140, `variant` says why)."""
+    kind = element.uml_type or "element of unknown type"
+    b.diags.append(
+        dg.UNEXPECTED_ELEMENT.at(
+            element.span,
+            variant,
+            feature=element.feature,
+            label=label(element),
+            kind=kind,
+            **values,
+        )
     )
 
 
 def _regions(b: Builder, owner: RawElement, ctx: MachineContext) -> tuple[Region, ...]:
     for region in owner.kids("region"):
         if region.uml_type != "Region":
-            _misplaced(b, region, "only a Region may stand there", "make it a uml:Region")
+            _misplaced(b, region, "not-a-region")
     return tuple(_region(b, r, ctx) for r in owner.kids("region"))
 
 
@@ -72,12 +77,7 @@ def _connection_points(
     points = []
     for point in owner.kids("connectionPoint"):
         if point.uml_type != "Pseudostate" or point.attrs.get("kind") not in _POINT_KINDS:
-            _misplaced(
-                b,
-                point,
-                "connection points are entryPoint and exitPoint pseudostates",
-                "move it into a region, or make it an entry or exit point",
-            )
+            _misplaced(b, point, "not-a-connection-point")
             continue
         points.append(_pseudostate(b, point, ctx))
     return tuple(points)
@@ -90,9 +90,7 @@ _VERTEX_TYPES = {"State", "FinalState", "Pseudostate"}
 def _region(b: Builder, element: RawElement, ctx: MachineContext) -> Region:
     for transition in element.kids("transition"):
         if transition.uml_type != "Transition":
-            _misplaced(
-                b, transition, "only a Transition may stand there", "make it a uml:Transition"
-            )
+            _misplaced(b, transition, "not-a-transition")
         ctx.transitions.append(transition)
     vertices: list[Vertex] = []
     for sub in element.kids("subvertex"):
@@ -112,21 +110,10 @@ def _vertex(b: Builder, element: RawElement, ctx: MachineContext) -> Vertex | No
     ConnectionPointReference) is an error: dropping it, as swarmgen once did with a warning,
     left transitions and initial pseudostates pointing at nothing."""
     if element.uml_type not in _VERTEX_TYPES:
-        _misplaced(
-            b,
-            element,
-            "a region holds states, final states and pseudostates",
-            "a state machine used inside another is a submachine state: a uml:State with "
-            'submachine="<machine id>"',
-        )
+        _misplaced(b, element, "not-a-vertex")
         return None
     if element.uml_type == "Pseudostate" and element.attrs.get("kind") in _POINT_KINDS:
-        _misplaced(
-            b,
-            element,
-            f"an {element.attrs['kind']} belongs to the connectionPoint list of a state or machine",
-            "make it a connectionPoint of the state or machine it enters or leaves",
-        )
+        _misplaced(b, element, "point-in-region", point=element.attrs["kind"])
         return None
     if element.id:
         ctx.vertices[element.id] = element
@@ -144,11 +131,8 @@ def _final_content(b: Builder, element: RawElement) -> None:
     content = [f for f in ("region", "entry", "exit", "doActivity") if element.first(f) is not None]
     content += ["submachine"] if element.ref_values("submachine") else []
     if content:
-        b.report(
-            dg.BAD_FINAL_STATE,
-            f"final state '{element.name}' has {', '.join(content)}; a final state has none",
-            element.span,
-            hint="make it an ordinary state followed by a final state",
+        b.diags.append(
+            dg.BAD_FINAL_STATE.at(element.span, state=element.name, content=", ".join(content))
         )
 
 
@@ -158,11 +142,11 @@ def _pseudostate(b: Builder, element: RawElement, ctx: MachineContext) -> Pseudo
     kind_text = element.attrs.get("kind", "initial")
     known = kind_text in PseudoKind.__members__.values()
     if not known:
-        b.report(
-            dg.UNKNOWN_KIND,
-            f"pseudostate '{element.name}' has kind '{kind_text}', which UML does not define",
-            element.span,
-            hint=f"use one of: {', '.join(k.value for k in PseudoKind)}",
+        kinds = ", ".join(k.value for k in PseudoKind)
+        b.diags.append(
+            dg.UNKNOWN_KIND.at(
+                element.span, "pseudostate", name=element.name, kind=kind_text, kinds=kinds
+            )
         )
     kind = PseudoKind(kind_text) if known else PseudoKind.INITIAL
     return Pseudostate(

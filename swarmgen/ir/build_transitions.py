@@ -42,19 +42,13 @@ def read_transition(b: Builder, element: RawElement, ctx: MachineContext) -> Tra
     target = b.ref(element, "target")
     if source is None or target is None:
         if not element.ref_values("source") or not element.ref_values("target"):
-            b.report(
-                dg.BAD_TARGET,
-                f"transition '{element.name}' lacks a source or a target",
-                element.span,
-            )
+            b.diags.append(dg.BAD_TARGET.at(element.span, name=element.name))
         return None
     for end, which in ((source, "source"), (target, "target")):
         if end.id not in ctx.vertices:
-            b.report(
-                dg.BAD_TARGET,
-                f"transition {which} '{end.name}' is a {end.uml_type or end.feature}, "
-                "not a state of this machine",
-                element.span,
+            kind = end.uml_type or end.feature
+            b.diags.append(
+                dg.BAD_TARGET.at(element.span, "not-a-state", end=which, name=end.name, kind=kind)
             )
             return None
     source_behaviour = _source_behaviour(b, source)
@@ -89,11 +83,8 @@ _TRANSITION_KINDS: dict[str, Literal["external", "internal", "local"]] = {
 def _transition_kind(b: Builder, element: RawElement) -> Literal["external", "internal", "local"]:
     text = element.attrs.get("kind", "external")
     if text not in _TRANSITION_KINDS:
-        b.report(
-            dg.UNKNOWN_KIND,
-            f"transition {label(element)} has kind '{text}', which UML does not define",
-            element.span,
-            hint="use external, local or internal",
+        b.diags.append(
+            dg.UNKNOWN_KIND.at(element.span, "transition", label=label(element), kind=text)
         )
     return _TRANSITION_KINDS.get(text, "external")
 
@@ -121,7 +112,8 @@ def _guard(b: Builder, element: RawElement) -> tuple[expr.Expr | None, str | Non
     try:
         return expr.parse_expr(text), text
     except expr.ExprError as err:
-        b.report(dg.GUARD_SYNTAX, f"guard {quote_error(text, err)}", constraint.span, err.hint)
+        error = quote_error(text, err)
+        b.diags.append(dg.GUARD_SYNTAX.at(constraint.span, error=error, hint=err.hint))
         return None, text
 
 
@@ -151,7 +143,7 @@ def _trigger(b: Builder, element: RawElement, behaviour: Behaviour | None) -> Tr
     if kind == "AnyReceiveEvent":
         return Trigger(kind=TriggerKind.ANY, name="*", span=element.span)
     if kind == "ChangeEvent":
-        b.report(dg.UNSUPPORTED, "change events are not supported; trigger ignored", element.span)
+        b.diags.append(dg.UNSUPPORTED.at(element.span, "change-event"))
         return None
     signal = event if kind == "Signal" else b.ref(event, "signal", {"Signal"})
     if signal is not None:
@@ -179,15 +171,10 @@ def _named_trigger(
     if name in DEFAULT_OUTCOMES or behaviour is not None:
         return Trigger(kind=TriggerKind.OUTCOME, name=name, span=element.span)
     if not name:
-        b.report(dg.UNKNOWN_EVENT, "trigger names no event", element.span)
+        b.diags.append(dg.UNKNOWN_EVENT.at(element.span, "unnamed"))
         return None
     if b.raw.stereotypes and any(a.name == "SwarmEvent" for a in b.raw.stereotypes):
-        b.report(
-            dg.UNKNOWN_EVENT,
-            f"trigger '{name}' names no «SwarmEvent» signal and no outcome",
-            element.span,
-            hint=f"declare a Signal «SwarmEvent» named '{name}', or check the spelling",
-        )
+        b.diags.append(dg.UNKNOWN_EVENT.at(element.span, name=name))
         return None
     return Trigger(kind=TriggerKind.EVENT, name=name, span=element.span)
 
@@ -197,11 +184,6 @@ def _time_trigger(b: Builder, element: RawElement, event: RawElement) -> Trigger
     expression = when.first("expr") if when is not None else None
     value = literal_value(expression) if expression is not None else None
     if isinstance(value, bool) or not isinstance(value, int | float) or value < 0:
-        b.report(
-            dg.UNSUPPORTED,
-            f"time event '{event.name}' has no constant delay; trigger ignored",
-            element.span,
-            hint="give the TimeEvent a TimeExpression with a LiteralInteger in milliseconds",
-        )
+        b.diags.append(dg.UNSUPPORTED.at(element.span, "time-event", event=event.name))
         return None
     return Trigger(kind=TriggerKind.TIME, name=event.name, delay_ms=int(value), span=element.span)

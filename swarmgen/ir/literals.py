@@ -35,6 +35,7 @@ _REAL_HINT = "write a finite decimal number such as 2.5 or 1e3"
 
 
 def literal_text(spec: RawElement) -> str:
+    """The lexical text of a ValueSpecification (its `value`, else its `symbol`)."""
     return spec.attrs.get("value", spec.attrs.get("symbol", ""))
 
 

@@ -21,6 +21,8 @@ DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
 
 
 class Node(BaseModel):
+    """The base of every IR node: frozen, no unknown fields."""
+
     model_config = ConfigDict(frozen=True, extra="forbid")
 
 
@@ -39,6 +41,8 @@ class Property(Node):
 
 
 class DataType(Node):
+    """A structured data type: named fields an event or a property can carry."""
+
     id: str
     name: str
     ident: str
@@ -50,6 +54,8 @@ class DataType(Node):
 
 
 class HardwareKind(StrEnum):
+    """What a hardware component is, by its profile stereotype."""
+
     SENSOR = "Sensor"
     ACTUATOR = "Actuator"
     CONTROLLER = "Controller"
@@ -57,6 +63,8 @@ class HardwareKind(StrEnum):
 
 
 class HardwareComponent(Node):
+    """A hardware class (sensor, actuator, ...): what it can do and its parameters."""
+
     id: str
     name: str
     ident: str
@@ -80,6 +88,8 @@ class Part(Node):
 
 
 class MemberType(Node):
+    """A kind of swarm member: its hardware parts, its data and its state machine."""
+
     id: str
     name: str
     ident: str
@@ -91,6 +101,8 @@ class MemberType(Node):
 
 
 class Swarm(Node):
+    """A swarm composition: which member types, how many of each."""
+
     id: str
     name: str
     ident: str
@@ -102,6 +114,8 @@ class Swarm(Node):
 
 
 class BehaviourKind(StrEnum):
+    """What a behaviour is, by its profile stereotype."""
+
     COMPLEX = "ComplexBehavior"
     SWARM_BEHAVIOR = "SwarmBehavior"
     SWARM_FUNCTION = "SwarmFunction"
@@ -109,12 +123,16 @@ class BehaviourKind(StrEnum):
 
 
 class RosBinding(Node):
+    """How a behaviour maps to ROS: an action, a service or a topic, by name and type."""
+
     kind: Literal["action", "service", "topic"]
     name: str | None = None
     type: str | None = None
 
 
 class Behaviour(Node):
+    """A library behaviour a state can run: its inputs, outputs, outcomes and requirements."""
+
     id: str
     name: str
     ident: str
@@ -130,6 +148,8 @@ class Behaviour(Node):
 
 
 class Event(Node):
+    """An event or signal: its fields, who sends it and how far it travels."""
+
     id: str
     name: str
     ident: str
@@ -153,12 +173,16 @@ class OpaqueCode(Node):
 
 
 class BehaviourCall(Node):
+    """A state's `do` activity: the behaviour it runs and its argument bindings."""
+
     behaviour: str  # Behaviour.id
     bindings: tuple[Binding, ...]
     span: Span
 
 
 class PseudoKind(StrEnum):
+    """The kinds of UML pseudostate."""
+
     INITIAL = "initial"
     CHOICE = "choice"
     JUNCTION = "junction"
@@ -172,6 +196,8 @@ class PseudoKind(StrEnum):
 
 
 class Pseudostate(Node):
+    """An initial, choice, junction, fork, join, history, terminate or connection point."""
+
     type: Literal["pseudo"] = "pseudo"
     id: str
     name: str
@@ -180,6 +206,8 @@ class Pseudostate(Node):
 
 
 class FinalState(Node):
+    """A region's final state."""
+
     type: Literal["final"] = "final"
     id: str
     name: str
@@ -198,6 +226,8 @@ class ConnectionRef(Node):
 
 
 class State(Node):
+    """A simple, composite or submachine state with its actions and activity."""
+
     type: Literal["state"] = "state"
     id: str
     name: str
@@ -216,6 +246,8 @@ Vertex = Annotated[State | FinalState | Pseudostate, Field(discriminator="type")
 
 
 class Region(Node):
+    """A region of a state or machine: the vertices that run in it."""
+
     id: str
     name: str
     vertices: tuple[Vertex, ...]
@@ -223,6 +255,8 @@ class Region(Node):
 
 
 class TriggerKind(StrEnum):
+    """What fires a transition."""
+
     EVENT = "event"  # a swarm event or signal
     OUTCOME = "outcome"  # the outcome of the behaviour the source state runs
     TIME = "time"  # `after` a delay
@@ -231,6 +265,8 @@ class TriggerKind(StrEnum):
 
 
 class Trigger(Node):
+    """One trigger of a transition: an event, an outcome, a delay, a call or anything."""
+
     kind: TriggerKind
     name: str  # event or outcome name (the model's)
     event: str | None = None  # Event.id when kind is EVENT
@@ -239,6 +275,8 @@ class Trigger(Node):
 
 
 class Transition(Node):
+    """A transition between two vertices: triggers, guard and effect."""
+
     id: str
     name: str
     source: str
@@ -253,6 +291,8 @@ class Transition(Node):
 
 
 class Machine(Node):
+    """A state machine: its regions, connection points, transitions and context data."""
+
     id: str
     name: str
     ident: str
@@ -265,6 +305,8 @@ class Machine(Node):
 
 
 class Model(Node):
+    """The whole model as the IR: every element the checks and backends read."""
+
     name: str
     source: str
     exporter: str

@@ -72,6 +72,7 @@ class ModelIndex:
     _last: ModelIndex | None = None
 
     def __new__(cls, model: Model) -> ModelIndex:
+        """The cached index when `model` is the last one indexed, else a new one."""
         last = cls._last
         if last is not None and last.model is model:
             return last
@@ -104,6 +105,7 @@ class ModelIndex:
             self.events_by_name.setdefault(event.name, event)
 
     def submachines(self, machine: Machine) -> list[str]:
+        """Ids of the submachines the machine's states use, computed once per machine."""
         found = self._submachines.get(machine.id)
         if found is None:
             found = [
@@ -149,6 +151,7 @@ class ModelIndex:
         return scope
 
     def behaviours_of(self, machine: Machine) -> list[Behaviour]:
+        """The library behaviours the machine's states run, in walk order."""
         found = []
         for placed in walk(machine):
             vertex = placed.vertex
@@ -181,9 +184,11 @@ class ModelIndex:
         return found
 
     def members_running(self, machine: Machine) -> list[MemberType]:
+        """The member types whose behaviour uses the machine (as root or submachine)."""
         return [m for m in self.model.member_types if machine in self.member_machines(m)]
 
     def member_machines(self, member: MemberType) -> list[Machine]:
+        """The member type's machine and every submachine it uses."""
         root = self.machines.get(member.machine or "")
         return self.reachable_machines(root) if root is not None else []
 
@@ -202,6 +207,7 @@ def composition(model: Model) -> dict[str, int]:
 
 
 def vertices_by_id(machine: Machine) -> dict[str, Placed]:
+    """Every vertex of the machine (with its place) by id."""
     return {p.vertex.id: p for p in walk(machine)}
 
 
@@ -216,6 +222,7 @@ def connection_owner(machine: Machine) -> dict[str, State]:
 
 
 def outgoing(machine: Machine) -> dict[str, list[Transition]]:
+    """Transitions of the machine by source vertex id."""
     result: dict[str, list[Transition]] = {}
     for transition in machine.transitions:
         result.setdefault(transition.source, []).append(transition)
@@ -223,6 +230,7 @@ def outgoing(machine: Machine) -> dict[str, list[Transition]]:
 
 
 def incoming(machine: Machine) -> dict[str, list[Transition]]:
+    """Transitions of the machine by target vertex id."""
     result: dict[str, list[Transition]] = {}
     for transition in machine.transitions:
         result.setdefault(transition.target, []).append(transition)
@@ -230,4 +238,5 @@ def incoming(machine: Machine) -> dict[str, list[Transition]]:
 
 
 def initial_of(region: Region) -> list[Pseudostate]:
+    """The region's initial pseudostates (a well-formed region has one)."""
     return [v for v in region.vertices if isinstance(v, Pseudostate) and v.kind == "initial"]

@@ -25,11 +25,13 @@ Step = Mapping[str, Any]
 
 
 def expand(step: Step) -> list[Step]:
+    """The steps of a step: a burst's, or the step itself."""
     burst = step.get("burst")
     return list(burst) if isinstance(burst, list) else [step]
 
 
 def describe(step: Step) -> str:
+    """A step in words, for messages."""
     if "burst" in step:
         return " + ".join(describe(s) for s in expand(step))
     if "complete" in step:
@@ -142,6 +144,7 @@ def _record(number: int, step: Step | None, member: Member) -> dict[str, Any]:
 
 
 def outcome_event(node: Node, outcome: str) -> str:
+    """The event that reports a behaviour's outcome to the state's finalize."""
     return f"{FINALIZE_PREFIX}{node.id}.{outcome}"
 
 

@@ -101,6 +101,8 @@ SPIN = "$sg.spin()"
 
 @dataclass(frozen=True)
 class ScxmlDocument:
+    """One SCXML document with the counts the CLI reports."""
+
     name: str  # file stem
     member: str | None  # member type name, if the document is a member's behaviour
     machine: str  # root machine name
@@ -110,10 +112,12 @@ class ScxmlDocument:
 
 
 def emit(model: Model) -> tuple[ScxmlDocument, ...]:
+    """Lower the model and serialize each chart as an SCXML document."""
     return tuple(serialize(chart) for chart in lower(model))
 
 
 def serialize(chart: c.Chart) -> ScxmlDocument:
+    """One chart as an SCXML document (ECMAScript datamodel, swarmgen's extensions)."""
     scxml = etree.Element(f"{{{SCXML_NS}}}scxml", nsmap=_NSMAP)  # type: ignore[arg-type]
     scxml.set("version", "1.0")
     scxml.set("datamodel", "ecmascript")

@@ -40,11 +40,12 @@ import numpy as np
 from swarmgen.runtime.chart import Call, Node
 from swarmgen.runtime.engine import FINALIZE_PREFIX, Event
 from swarmgen.runtime.member import InMemoryBus, Request
+from swarmgen.sim.grid import INF, Geometry, fan_headings, south_line
 from swarmgen.sim.library import Activation, Library, SimBehaviour, claims, found
 from swarmgen.sim.machines import Machines, MemberMachine, build_chart, waited_outcomes
 from swarmgen.sim.member import SimMember
 from swarmgen.sim.scenario import Scenario, SimulationError
-from swarmgen.sim.world import FOUND, INF, RESCUED, Geometry, World, fan_headings, south_line
+from swarmgen.sim.world import FOUND, RESCUED, World
 
 if TYPE_CHECKING:
     from swarmgen.trace.recorder import BagRecorder
@@ -58,10 +59,13 @@ EVENTS_PER_TICK = 200_000  # more events than this in one tick of one run: a liv
 
 @dataclass(frozen=True)
 class Config:
+    """One swarm configuration of a sweep: member counts and the number of targets."""
+
     counts: tuple[tuple[str, int], ...]  # (member type, count) in model order
     targets: int
 
     def label(self) -> str:
+        """The configuration as reports show it: `UAV=2 UGV=2 targets=4`."""
         parts = [f"{k}={v}" for k, v in self.counts]
         return " ".join([*parts, f"targets={self.targets}"])
 
@@ -70,11 +74,14 @@ class Config:
         return "_".join([*(f"{k}{v}" for k, v in self.counts), f"targets{self.targets}"])
 
     def seed_key(self) -> list[int]:
+        """The numbers that key the configuration's random streams."""
         return [self.targets, *(count for _, count in self.counts)]
 
 
 @dataclass
 class RunResult:
+    """What one repetition measured: why it stopped, coverage, search and rescue times."""
+
     config: int  # index into the sweep's configurations
     rep: int
     end_tick: int
@@ -203,12 +210,15 @@ class Batch:
     # --- the host services (swarmgen.sim.library.Host)
 
     def now(self, run: int) -> int:
+        """The current tick of a run."""
         return self.t[run]
 
     def at(self, run: int, tick: int, then: Callable[[], None]) -> None:
+        """Schedule `then` at a tick of a run."""
         heapq.heappush(self.schedule[run], (tick, next(self._seq), then))
 
     def after(self, act: Activation, ticks: int, then: Callable[[], None]) -> None:
+        """Run `then` `ticks` from now, unless the activation has ended by then."""
         if ticks <= 0:
             then()
             return
@@ -236,6 +246,7 @@ class Batch:
         )
 
     def end(self, act: Activation) -> None:
+        """End an activation (idempotent): forget it and stop its implementation."""
         if act.done:
             return
         act.done = True
@@ -245,12 +256,15 @@ class Batch:
         act.impl.stop(self, act)
 
     def emit(self, act: Activation, event: str, data: Mapping[str, Any]) -> None:
+        """Emit an event of a behaviour through its member's bus, in the event's scope."""
         act.request.emit(event, data, self.scopes.get(event, "swarm"))
 
     def outputs_of(self, behaviour: str) -> tuple[tuple[str, str | None], ...]:
+        """The outputs (identifier, type) a behaviour declares."""
         return self._outputs.get(behaviour, ())
 
     def activation_of(self, g: int, impl: SimBehaviour) -> Activation | None:
+        """The member's live activation of an implementation, if any."""
         for act in self.members[g].live.values():
             if act.impl is impl:
                 return act
@@ -259,6 +273,7 @@ class Batch:
     def start_call(
         self, member: SimMember, node: Node, call: Call, args: dict[str, Any], activation: int
     ) -> None:
+        """Start a state's behaviour in the simulated library (the engine's host call)."""
         impl = self.library.get(call.behaviour)
         request = Request(
             member.member_type,
@@ -290,6 +305,7 @@ class Batch:
     # --- time
 
     def run_all(self) -> list[RunResult]:
+        """Run every repetition (recording a bag per run with `record`); their results."""
         if self.record is None:
             return self._run_all()
         from swarmgen.trace.recorder import BagRecorder, VirtualClock

@@ -60,6 +60,7 @@ class Activation:
 
     @property
     def args(self) -> dict[str, Any]:
+        """The behaviour's arguments, as the chart computed them."""
         return self.request.args
 
 
@@ -69,12 +70,23 @@ class Host(Protocol):
     world: World
     scenario: Scenario
 
-    def now(self, run: int) -> int: ...
-    def after(self, act: Activation, ticks: int, then: Callable[[], None]) -> None: ...
-    def finish(self, act: Activation, outcome: str, outputs: Mapping[str, Any] | None) -> None: ...
-    def emit(self, act: Activation, event: str, data: Mapping[str, Any]) -> None: ...
-    def outputs_of(self, behaviour: str) -> tuple[tuple[str, str | None], ...]: ...
-    def activation_of(self, g: int, impl: SimBehaviour) -> Activation | None: ...
+    def now(self, run: int) -> int:
+        """The current tick of a run."""
+
+    def after(self, act: Activation, ticks: int, then: Callable[[], None]) -> None:
+        """Run `then` after `ticks`, unless the activation has ended by then."""
+
+    def finish(self, act: Activation, outcome: str, outputs: Mapping[str, Any] | None) -> None:
+        """End the activation with an outcome (and outputs) sent to its member."""
+
+    def emit(self, act: Activation, event: str, data: Mapping[str, Any]) -> None:
+        """Send an event from the activation's member, in the event's scope."""
+
+    def outputs_of(self, behaviour: str) -> tuple[tuple[str, str | None], ...]:
+        """The outputs (identifier, type) a behaviour declares."""
+
+    def activation_of(self, g: int, impl: SimBehaviour) -> Activation | None:
+        """The member's live activation of an implementation, if any."""
 
 
 def outcome(act: Activation, wanted: str) -> str:
@@ -94,6 +106,7 @@ def target_of(host: Host, act: Activation, key: str = "target_id") -> int | None
 
 
 def pose(host: Host, run: int, target: int) -> dict[str, float]:
+    """The pose of a target of a run, as behaviours' outputs carry it."""
     w = host.world
     return {"x": float(w.tx[run, target]), "y": float(w.ty[run, target]), "z": 0.0}
 
@@ -104,6 +117,7 @@ class SimBehaviour:
     name = "generic"
 
     def start(self, host: Host, act: Activation) -> None:
+        """Succeed after `timing.default` ticks with zero-valued outputs (when waited for)."""
         if not act.waited:
             return  # nobody waits for it: it runs until preempted
         ticks = host.scenario.timing["default"]
@@ -115,11 +129,14 @@ class SimBehaviour:
 
 
 class Timed(SimBehaviour):
+    """A behaviour that succeeds after the scenario's timing of its name (TakeOff, Land)."""
+
     def __init__(self, name: str, timing: str) -> None:
         self.name = name
         self.timing = timing
 
     def start(self, host: Host, act: Activation) -> None:
+        """Succeed after the behaviour's timing (when waited for)."""
         if not act.waited:
             return
         ticks = host.scenario.timing[self.timing]
@@ -128,35 +145,47 @@ class Timed(SimBehaviour):
         )
 
     def outputs(self, act: Activation) -> dict[str, Any]:
+        """The outputs it succeeds with: none."""
         return {}
 
 
 class LocalCoverage(Timed):
+    """Succeeds after `timing.local_coverage` ticks with the member's current target."""
+
     def outputs(self, act: Activation) -> dict[str, Any]:
+        """The member's current target, as it was passed in."""
         data = act.request.data
         return {"target_id": data.get("target_id"), "target_pose": data.get("target_pose")}
 
 
 class Coverage(SimBehaviour):
+    """Random-direction coverage in the world from where the member stands."""
+
     name = "Coverage"
 
     def start(self, host: Host, act: Activation) -> None:
+        """Start covering; report the targets already in view."""
         reports = bool(act.waited)
         seen = host.world.start_covering(act.g, host.now(act.run), reports)
         if seen:
             found(host, act.run, act.g, seen)
 
     def stop(self, host: Host, act: Activation) -> None:
+        """Stop where the member is now."""
         host.world.stop_covering(act.g, host.now(act.run))
 
 
 class TargetMonitoring(SimBehaviour):
+    """While active, the member's finds are reported to the swarm (`targetFound`)."""
+
     name = "TargetMonitoring"
 
     def start(self, host: Host, act: Activation) -> None:
+        """The member's finds are reported from now on."""
         host.world.detecting[act.g] = True
 
     def stop(self, host: Host, act: Activation) -> None:
+        """The member's finds are no longer reported."""
         host.world.detecting[act.g] = False
 
 
@@ -191,6 +220,7 @@ class TaskAllocation(SimBehaviour):
         self.bids: dict[tuple[int, int], list[Activation]] = {}
 
     def start(self, host: Host, act: Activation) -> None:
+        """Open the auction of the member's own find (abort for anyone else's)."""
         world = host.world
         target = target_of(host, act)
         if (
@@ -203,6 +233,7 @@ class TaskAllocation(SimBehaviour):
         host.after(act, host.scenario.timing["allocation"], lambda: self.close(host, act, target))
 
     def close(self, host: Host, act: Activation, target: int) -> None:
+        """Assign the target to the chosen bidder and abort the others."""
         bidders = [b for b in self.bids.get((act.run, target), []) if not b.done]
         winner = self.choose(host, act, target, bidders)
         for bid in bidders:
@@ -222,6 +253,7 @@ class TaskAllocation(SimBehaviour):
     def choose(
         self, host: Host, act: Activation, target: int, bidders: list[Activation]
     ) -> Activation | None:
+        """The winning bid by `allocation`: the paired bidder, or the nearest."""
         world = host.world
         if host.scenario.allocation == "paired":
             mine = world.start_cell[act.g]
@@ -237,12 +269,15 @@ class TaskAllocation(SimBehaviour):
 
 
 class TaskBidding(SimBehaviour):
+    """Bids for the member's target; succeeds when the auction assigns it to this member."""
+
     name = "TaskBidding"
 
     def __init__(self, auctions: TaskAllocation) -> None:
         self.auctions = auctions
 
     def start(self, host: Host, act: Activation) -> None:
+        """Bid for the target; abort after `timing.bid_timeout` ticks."""
         target = target_of(host, act)
         if target is None:
             host.finish(act, outcome(act, "aborted"), None)
@@ -256,6 +291,7 @@ class TaskBidding(SimBehaviour):
         )
 
     def stop(self, host: Host, act: Activation) -> None:
+        """Withdraw the bid."""
         key: tuple[int, int] | None = act.state.get("key")
         bids = self.auctions.bids.get(key) if key is not None else None
         if key is not None and bids is not None and act in bids:
@@ -273,6 +309,7 @@ class Tracking(SimBehaviour):
         self.trackers: dict[tuple[int, int], list[Activation]] = {}
 
     def start(self, host: Host, act: Activation) -> None:
+        """Hover over the target until it is rescued."""
         target = target_of(host, act)
         if target is None:
             host.finish(act, outcome(act, "aborted"), None)
@@ -284,10 +321,12 @@ class Tracking(SimBehaviour):
         self.trackers.setdefault(key, []).append(act)
 
     def rescued(self, host: Host, run: int, target: int) -> None:
+        """The target was rescued: its trackers succeed."""
         for act in list(self.trackers.get((run, target), [])):
             host.finish(act, outcome(act, "succeeded"), None)
 
     def stop(self, host: Host, act: Activation) -> None:
+        """Stop tracking."""
         key: tuple[int, int] | None = act.state.get("key")
         acts = self.trackers.get(key) if key is not None else None
         if key is not None and acts is not None and act in acts:
@@ -302,6 +341,7 @@ class MoveTo(SimBehaviour):
     name = "MoveTo"
 
     def start(self, host: Host, act: Activation) -> None:
+        """Drive straight to the goal pose, one patch per tick."""
         goal = next(
             (v for v in act.args.values() if isinstance(v, Mapping) and "x" in v and "y" in v),
             None,
@@ -323,6 +363,7 @@ class MoveTo(SimBehaviour):
         host.after(act, math.ceil(distance - 1e-9), arrive)
 
     def stop(self, host: Host, act: Activation) -> None:
+        """Stopped on the way: stand where the drive has got to."""
         s = act.state
         if not s or s.get("arrived"):
             return
@@ -334,12 +375,16 @@ class MoveTo(SimBehaviour):
 
 
 class Rescue(SimBehaviour):
+    """Rescues the member's target after `timing.rescue` ticks and emits `targetRescued`."""
+
     name = "Rescue"
 
     def __init__(self, tracking: Tracking) -> None:
         self.tracking = tracking
 
     def start(self, host: Host, act: Activation) -> None:
+        """Rescue the target after `timing.rescue` ticks."""
+
         def done() -> None:
             target = target_of(host, act)
             if target is None or host.world.status[act.run, target] == RESCUED:
@@ -380,10 +425,12 @@ class Library:
         self.aliases = {"SelectRover": "TaskAllocation", "Bidding": "TaskBidding", **aliases}
 
     def get(self, behaviour: str) -> SimBehaviour:
+        """The implementation of a behaviour (or of its alias), else the generic one."""
         name = self.aliases.get(behaviour, behaviour)
         return self.impls.get(name) or self.impls["generic"]
 
     def known(self) -> list[str]:
+        """Every behaviour name with an implementation or an alias."""
         return sorted(set(self.impls) | set(self.aliases))
 
 

@@ -26,12 +26,15 @@ class MemberMachine:
 
 @dataclass(frozen=True)
 class Machines:
+    """The compiled member machines of a model and its swarm composition."""
+
     model: str
     source: str
     members: tuple[MemberMachine, ...]
     composition: dict[str, int]
 
     def types(self) -> list[str]:
+        """The member types, in model order."""
         return [m.member_type for m in self.members]
 
 

@@ -23,13 +23,16 @@ class Host(Protocol):
     pending: list[deque[tuple[SimMember, Event]]]
     scenario: Scenario
 
-    def at(self, run: int, tick: int, then: Callable[[], None]) -> None: ...
+    def at(self, run: int, tick: int, then: Callable[[], None]) -> None:
+        """Schedule `then` at a tick of a run."""
 
-    def end(self, act: Activation) -> None: ...
+    def end(self, act: Activation) -> None:
+        """End an activation (idempotent): forget it and stop its implementation."""
 
     def start_call(
         self, member: SimMember, node: Node, call: Call, args: dict[str, Any], activation: int
-    ) -> None: ...
+    ) -> None:
+        """Start a state's behaviour in the simulated library."""
 
 
 class _NoLibrary:
@@ -65,17 +68,21 @@ class SimMember(Member):
         self.engine.clock = lambda: float(batch.t[run])
 
     def deliver(self, event: Event) -> None:
+        """Queue an event to this member for the batch's next delivery."""
         self.batch.pending[self.rank].append((self, event))
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
+        """Start a state's behaviour through the batch."""
         self.batch.start_call(self, node, call, args, activation)
 
     def cancel_call(self, node: Node, activation: int) -> None:
+        """End the state's behaviour if this activation still runs."""
         act = self.live.get(node.id)
         if act is not None and act.number == activation:
             self.batch.end(act)
 
     def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
+        """Deliver `event` after `delay_ms` (in ticks, at least one) unless cancelled."""
         token = self.timer_tokens.get(event, 0) + 1
         self.timer_tokens[event] = token
         ticks = max(1, math.ceil(delay_ms / self.batch.scenario.timing["tick_ms"]))
@@ -88,4 +95,5 @@ class SimMember(Member):
         self.batch.at(self.rank, self.batch.t[self.rank] + ticks, fire)
 
     def cancel_timer(self, node: Node, event: str) -> None:
+        """Cancel a pending timer."""
         self.timer_tokens.pop(event, None)

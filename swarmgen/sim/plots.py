@@ -68,6 +68,7 @@ def _line(ax: Any, rows: list[Row], x_of: Any, label: str) -> None:
 
 
 def coverage_figure(summary: Summary, title: str) -> dict[str, bytes] | None:
+    """The coverage figure as {"png": ..., "svg": ...}; None when nothing was swept or covered."""
     rows = summary.coverage
     swept = summary.swept
     if not rows or swept is None or not any(r.estimate.mean for r in rows):
@@ -96,6 +97,7 @@ def coverage_figure(summary: Summary, title: str) -> dict[str, bytes] | None:
 
 
 def sar_figure(summary: Summary, title: str) -> dict[str, bytes] | None:
+    """The search and rescue figure as {"png": ..., "svg": ...}; None without search results."""
     if not summary.search or summary.swept is None:
         return None
     swept = summary.swept

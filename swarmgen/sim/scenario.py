@@ -32,6 +32,22 @@ from typing import Any
 from swarmgen import jsonfile
 from swarmgen.console import shown
 from swarmgen.errors import SwarmgenError
+from swarmgen.sim.limits import (
+    MAX_LIST,
+    MAX_MEMBER_RUNS,
+    MAX_MEMBERS,
+    MAX_PATCH_RUNS,
+    MAX_REPS,
+    MAX_RUNS,
+    MAX_SEED,
+    MAX_SIDE,
+    MAX_TARGETS,
+    MAX_TICK_MS,
+    MAX_TICKS,
+    MAX_VIEW,
+    SCENARIO_BYTES,
+    STAMP_NS,
+)
 
 SHIPPED = Path(__file__).resolve().parent / "scenarios"
 
@@ -61,6 +77,8 @@ class SimulationError(SwarmgenError):
 
 @dataclass(frozen=True)
 class Placement:
+    """How a member type's members start: layout, spacing and headings."""
+
     layout: str = "south"
     spacing: float = 4.0
     headings: str = "fan"
@@ -68,6 +86,8 @@ class Placement:
 
 @dataclass(frozen=True)
 class StationEvent:
+    """An event the ground station sends to the swarm at a tick."""
+
     tick: int
     event: str
     data: dict[str, Any] | None = None
@@ -75,6 +95,8 @@ class StationEvent:
 
 @dataclass(frozen=True)
 class Scenario:
+    """A simulation scenario: world, swept member counts, targets, station events, timings."""
+
     name: str
     description: str = ""
     width: int = 201
@@ -101,6 +123,7 @@ class Scenario:
     given: tuple[str, ...] = ()  # member types named on the command line (must exist)
 
     def placement_of(self, member_type: str) -> Placement:
+        """The placement of a member type, else of `*`, else the default."""
         return self.placement.get(member_type) or self.placement.get("*") or Placement()
 
     def origin_tick(self) -> int:
@@ -119,6 +142,7 @@ class Scenario:
         reps: int | None = None,
         seed: int | None = None,
     ) -> Scenario:
+        """A copy with the given member counts, targets, repetitions or seed (command-line overrides)."""
         changed = self
         if members:
             changed = replace(
@@ -135,6 +159,7 @@ class Scenario:
         return changed
 
     def to_json(self) -> dict[str, Any]:
+        """The scenario as scenario-file JSON."""
         return {
             "name": self.name,
             "description": self.description,
@@ -172,24 +197,6 @@ _KEYS = {
     "max_ticks", "reps", "seed", "coverage_levels", "target_levels",
 }  # fmt: skip
 
-# Limits, checked before anything runs (docs/simulate.md): beyond them a sweep would exhaust
-# memory (about 9 KB per member and repetition, 16 bytes per patch and repetition) or overflow
-# the world's 32-bit tick arrays, instead of failing cleanly.
-SCENARIO_BYTES = 1 << 20  # a scenario file
-MAX_SIDE = 10_000  # patches along one side of the world
-MAX_VIEW = 16  # Chebyshev radius of a member's view
-MAX_PATCH_RUNS = 10**8  # patches x repetitions of one configuration
-MAX_MEMBERS = 10_000  # members of one configuration
-MAX_MEMBER_RUNS = 100_000  # members x repetitions of one configuration
-MAX_TARGETS = 100_000  # targets of one configuration (and never more than the patches)
-MAX_REPS = 10_000  # repetitions per configuration
-MAX_RUNS = 100_000  # configurations x repetitions
-MAX_TICKS = 2_000_000_000  # ticks of a repetition (the world stores ticks as int32)
-MAX_TICK_MS = 86_400_000  # one day
-MAX_SEED = 2**63 - 1
-MAX_LIST = 1_000  # counts in a sweep, station events, levels
-_STAMP_NS = 2**63 - 1  # bag stamps (int64 ns) of the last tick must fit
-
 
 def resolve(name_or_path: str) -> Path:
     """`coverage`, `sar` (shipped) or a path to a scenario file."""
@@ -205,6 +212,7 @@ def resolve(name_or_path: str) -> Path:
 
 
 def load(name_or_path: str) -> Scenario:
+    """The scenario named (a shipped one) or at a path; ScenarioError naming the file otherwise."""
     path = resolve(name_or_path)
     try:
         payload = jsonfile.load(path, SCENARIO_BYTES)
@@ -255,9 +263,9 @@ def _parse(payload: Any, default_name: str) -> Scenario:
         station=station,
         clock_origin=origin,
         timing=_timing(_section(top, "timing", set(TIMING_DEFAULTS))),
-        allocation=_choice(top, "allocation", "paired", ALLOCATIONS),
+        allocation=_choice(top, "allocation", "paired", ALLOCATIONS, "$"),
         library=_library(_section(top, "library", None)),
-        stop=_choice(top, "stop", "coverage", STOPS),
+        stop=_choice(top, "stop", "coverage", STOPS, "$"),
         stop_level=_number(top, "stop_level", 1.0, "$", 0.0, 1.0),
         max_ticks=_int(top, "max_ticks", 5_000_000, "$", 1, MAX_TICKS),
         reps=_int(top, "reps", 50, "$", 1, MAX_REPS),
@@ -283,13 +291,6 @@ def _number(
 ) -> float:
     where = jsonfile.key_path(base, key)
     return jsonfile.expect_number(obj.get(key, default), where, low, high, above=True)
-
-
-def _choice(obj: dict[str, Any], key: str, default: str, choices: tuple[str, ...]) -> str:
-    value = jsonfile.expect_str(obj.get(key, default), f"$.{key}")
-    if value not in choices:
-        raise ScenarioError(f"$.{key}: '{value}': choose one of {', '.join(choices)}")
-    return value
 
 
 def _counts(value: Any, where: str, low: int, high: int) -> list[int]:
@@ -324,14 +325,14 @@ def _placements(section: dict[str, Any]) -> dict[str, Placement]:
         item = jsonfile.expect_object(value, where)
         jsonfile.check_keys(item, {"layout", "spacing", "headings"}, where)
         placement[kind] = Placement(
-            _choice_at(item, "layout", "south", LAYOUTS, where),
+            _choice(item, "layout", "south", LAYOUTS, where),
             _number(item, "spacing", 4.0, where, 0.0, float(MAX_SIDE)),
-            _choice_at(item, "headings", "fan", HEADINGS, where),
+            _choice(item, "headings", "fan", HEADINGS, where),
         )
     return placement
 
 
-def _choice_at(
+def _choice(
     obj: dict[str, Any], key: str, default: str, choices: tuple[str, ...], base: str
 ) -> str:
     where = jsonfile.key_path(base, key)
@@ -490,5 +491,5 @@ def _check_sweep(scenario: Scenario, combinations: int, members: int) -> None:
         raise ScenarioError(
             f"{max(scenario.targets):,} targets: more than the {patches:,} patches of the world"
         )
-    if scenario.max_ticks * scenario.timing["tick_ms"] * 1_000_000 > _STAMP_NS:
+    if scenario.max_ticks * scenario.timing["tick_ms"] * 1_000_000 > STAMP_NS:
         raise ScenarioError("max_ticks x tick_ms: the last tick is beyond 292 years of time")

@@ -41,6 +41,8 @@ def t975(df: int) -> float:
 
 @dataclass(frozen=True)
 class Estimate:
+    """Mean, standard deviation and 95 percent confidence half-width over the runs that got there."""
+
     n: int  # runs that reached it
     missing: int  # runs that did not (within max_ticks)
     mean: float | None
@@ -49,10 +51,12 @@ class Estimate:
 
     @property
     def low(self) -> float | None:
+        """The confidence interval's lower end."""
         return None if self.mean is None or self.half is None else self.mean - self.half
 
     @property
     def high(self) -> float | None:
+        """The confidence interval's upper end."""
         return None if self.mean is None or self.half is None else self.mean + self.half
 
 
@@ -77,6 +81,7 @@ def kth(values: Sequence[int | None], share: float, count: int) -> int | None:
 
 
 def level_name(share: float, kind: str) -> str:
+    """A level as reports show it: `50%`, or `first` for the first target."""
     if kind == "targets" and share == 0:
         return "first"
     return f"{share * 100:g}%"
@@ -84,6 +89,8 @@ def level_name(share: float, kind: str) -> str:
 
 @dataclass(frozen=True)
 class Row:
+    """One estimate of one configuration at one level."""
+
     counts: tuple[tuple[str, int], ...]
     targets: int
     level: float
@@ -92,6 +99,8 @@ class Row:
 
 @dataclass(frozen=True)
 class Summary:
+    """Every estimate of a simulation: coverage, search and rescue rows."""
+
     coverage: list[Row]
     search: list[Row]
     rescue: list[Row]
@@ -220,6 +229,8 @@ def _blank(value: int | None) -> str | int:
 
 
 def to_json(summary: Summary) -> dict[str, Any]:
+    """The summary as JSON-ready data (levels named, confidence intervals as pairs)."""
+
     def rows(items: list[Row], kind: str) -> list[dict[str, Any]]:
         return [
             {

@@ -73,6 +73,8 @@ def _chunks(reps: int, parts: int) -> Iterator[list[int]]:
 
 @dataclass
 class Simulation:
+    """A finished sweep: the machines, the scenario, its configurations and every run."""
+
     machines: Machines
     scenario: Scenario
     configs: list[Config]

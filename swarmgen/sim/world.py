@@ -27,107 +27,26 @@ the count of patches seen is kept up to date (`covered`), for the stop condition
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-INF = int(np.iinfo(np.int32).max)  # "never": a patch not (yet) seen
-I64 = NDArray[np.int64]
-F64 = NDArray[np.float64]
-U64 = NDArray[np.uint64]
-Bool = NDArray[np.bool_]
+from swarmgen.sim.grid import (
+    BLOCK,
+    F64,
+    GAMMAS,
+    I64,
+    INF,
+    MEMBER_KEY,
+    U64,
+    Bool,
+    Geometry,
+    Points,
+    distinct,
+    mix64,
+)
 
 UNFOUND, FOUND, CLAIMED, RESCUED = 0, 1, 2, 3  # target status
-
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_MEMBER = np.uint64(0xD1B54A32D192ED03)
-_BLOCK = 8  # turn directions drawn at once
-_GAMMAS = np.arange(_BLOCK + 1, dtype=np.uint64) * _GOLDEN  # k * gamma, wrapping
-
-
-def mix64(z: U64) -> U64:
-    """splitmix64's finaliser: a bijection on 64-bit words with good avalanche."""
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    return z ^ (z >> np.uint64(31))
-
-
-@dataclass(frozen=True)
-class Geometry:
-    width: int = 201
-    height: int = 201
-    view: int = 1  # Chebyshev radius of what a member sees (1: Moore neighbourhood)
-
-    @property
-    def cells(self) -> int:
-        return self.width * self.height
-
-
-def south_line(count: int, geometry: Geometry, spacing: float) -> tuple[F64, F64]:
-    """`count` start points on the south side, centred, `spacing` patches apart (closer when
-    they would not fit), west to east."""
-    centre = (geometry.width - 1) / 2
-    if count > 1:
-        spacing = min(spacing, (geometry.width - 1) / (count - 1))
-    offsets = (np.arange(count, dtype=np.float64) - (count - 1) / 2) * spacing
-    return centre + offsets, np.zeros(count, dtype=np.float64)
-
-
-def fan_headings(count: int) -> F64:
-    """Directions (radians, counter-clockwise from east) dividing the northern half-plane
-    regularly, one per member west to east: each member takes the bisector of its sector, so
-    one member flies north, two fly north-west and north-east, and so on."""
-    return math.pi - math.pi * (np.arange(count, dtype=np.float64) + 0.5) / max(count, 1)
-
-
-def _distinct(index: I64, stamp: NDArray[np.int32]) -> I64:
-    """The distinct values of `index`, in O(n) with a scratch array as large as the index
-    space: every position writes its number, the positions whose number survived are one per
-    value."""
-    order = np.arange(len(index), dtype=np.int32)
-    stamp[index] = order
-    distinct: I64 = index[stamp[index] == order]
-    return distinct
-
-
-@dataclass(frozen=True)
-class Points:
-    """Patches passed in one round, piece by piece (a piece is a straight stretch of one
-    member): per point its steps from the segment's origin and its flat patch index (run
-    included); the points of piece i start at `first[i]`."""
-
-    gm: I64  # member of each piece
-    s0: I64  # segment origin tick of each piece
-    first: I64  # index of each piece's first point
-    steps: I64
-    flat: I64
-
-    @staticmethod
-    def empty() -> Points:
-        e = np.zeros(0, dtype=np.int64)
-        return Points(e, e, e, e, e)
-
-    def __len__(self) -> int:
-        return len(self.flat)
-
-    def piece(self, at: I64) -> I64:
-        return np.searchsorted(self.first, at, side="right") - 1
-
-    def ticks(self, at: I64) -> I64:
-        return self.steps[at] + self.s0[self.piece(at)]
-
-    def members(self, at: I64) -> I64:
-        return self.gm[self.piece(at)]
-
-    def until(self, end: I64, cells: int) -> Points:
-        """The points at or before each run's end tick (pieces become one per point)."""
-        every = np.arange(len(self.flat))
-        keep = np.flatnonzero(self.ticks(every) <= end[self.flat // cells])
-        piece = self.piece(keep)
-        return Points(
-            self.gm[piece], self.s0[piece], np.arange(len(keep)), self.steps[keep], self.flat[keep]
-        )
 
 
 class World:
@@ -151,12 +70,19 @@ class World:
         self.PWH = self.PW * self.PH
         self.runs = runs = len(run_keys)
         self.per_run = per_run = len(start_x)
-        count = runs * per_run
         self.run_of: I64 = np.repeat(np.arange(runs, dtype=np.int64), per_run)
+        self._init_bodies(run_keys, start_x, start_y, headings)
+        self._init_coverage()
+        self._init_targets(targets)
+
+    def _init_bodies(self, run_keys: U64, start_x: F64, start_y: F64, headings: F64) -> None:
+        """Random streams, positions, headings and activity flags of every member."""
+        runs, per_run = self.runs, self.per_run
+        count = runs * per_run
         member = np.tile(np.arange(per_run, dtype=np.uint64), runs)
         run_keys = np.asarray(run_keys, dtype=np.uint64)
         # each member's random stream: splitmix64, state = key + draws * golden gamma
-        self.stream: U64 = mix64(run_keys[self.run_of] + member * _MEMBER)
+        self.stream: U64 = mix64(run_keys[self.run_of] + member * MEMBER_KEY)
         # the body, in patch-corner coordinates: position (the segment's origin while
         # covering), heading, the segment's first and last tick
         self.body: NDArray[np.float64] = np.empty((count, 4), dtype=np.float64)
@@ -176,8 +102,11 @@ class World:
         self.moving: Bool = np.zeros(count, dtype=np.bool_)  # running Coverage
         self.detecting: Bool = np.zeros(count, dtype=np.bool_)  # running TargetMonitoring
         self.reports: Bool = np.zeros(count, dtype=np.bool_)  # its Coverage ends on a find
-        # coverage: first tick on each patch, which patches were stood on / seen (the seen
-        # flags are padded by `view` so a view never needs bounds checks), patches seen per run
+
+    def _init_coverage(self) -> None:
+        """Coverage: first tick on each patch, which patches were stood on / seen (the seen
+        flags are padded by `view` so a view never needs bounds checks), patches seen per run."""
+        runs = self.runs
         self.first: NDArray[np.int32] = np.full(runs * self.WH, INF, dtype=np.int32)
         self.stood: NDArray[np.uint8] = np.zeros(runs * self.WH, dtype=np.uint8)
         seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
@@ -189,7 +118,10 @@ class World:
         side = 2 * self.v + 1
         oy_, ox_ = np.divmod(np.arange(side * side, dtype=np.int64), side)
         self._view_offsets: I64 = (oy_ - self.v) * self.PW + (ox_ - self.v)
-        # targets
+
+    def _init_targets(self, targets: I64) -> None:
+        """Where the targets are, their status and the ticks of what happened to them."""
+        runs = self.runs
         targets = np.asarray(targets, dtype=np.int64).reshape(runs, -1, 2)
         self.tx: I64 = targets[:, :, 0].copy()
         self.ty: I64 = targets[:, :, 1].copy()
@@ -248,11 +180,12 @@ class World:
         (shape (len(g), count)), without consuming them (see `consume`). The stream is
         splitmix64 keyed by (run key, member): a draw depends only on the run's key, the
         member and the draw's number."""
-        z = mix64(self.stream[g][:, None] + _GAMMAS[None, 1 : count + 1])
+        z = mix64(self.stream[g][:, None] + GAMMAS[None, 1 : count + 1])
         return (z >> np.uint64(11)).astype(np.float64) * (1.0 / 9007199254740992.0)
 
     def consume(self, g: I64, used: I64) -> None:
-        self.stream[g] += _GAMMAS[used]
+        """Advance each member's stream past the `used` draws it took."""
+        self.stream[g] += GAMMAS[used]
 
     # --- covering
 
@@ -286,6 +219,7 @@ class World:
         self.reports[member] = False
 
     def detects(self, member: int) -> bool:
+        """Whether the member reports targets in view (monitoring, or a reporting Coverage)."""
         return bool(self.detecting[member] or self.reports[member])
 
     def _turn(self, g: I64) -> None:
@@ -300,7 +234,7 @@ class World:
         todo = np.arange(len(g))
         for _ in range(16):  # candidates in blocks; the first that keeps the body inside wins
             gt = g[todo]
-            angle = (2.0 * math.pi) * self.uniforms(gt, _BLOCK)
+            angle = (2.0 * math.pi) * self.uniforms(gt, BLOCK)
             cx, cy = np.cos(angle), np.sin(angle)
             cx += ox[todo, None]
             cy += oy[todo, None]
@@ -310,7 +244,7 @@ class World:
             chosen = angle[rows, pick[rows]]
             done = todo[rows]
             body[done, 2], body[done, 3] = np.cos(chosen), np.sin(chosen)
-            used = np.full(len(todo), _BLOCK, dtype=np.int64)
+            used = np.full(len(todo), BLOCK, dtype=np.int64)
             used[rows] = pick[rows] + 1  # only the draws up to the chosen one are used
             self.consume(gt, used)
             if len(rows) == len(todo):
@@ -426,14 +360,14 @@ class World:
             return
         flat = points.flat[new]
         np.minimum.at(self.first, flat, points.ticks(new).astype(np.int32))
-        centres = _distinct(flat, self._stamp_first)
+        centres = distinct(flat, self._stamp_first)
         self.stood[centres] = 1
         run, rest = np.divmod(centres, self.WH)
         y, x = np.divmod(rest, self.W)
         padded = (run * self.PH + y + self.v) * self.PW + x + self.v
         around = (padded[:, None] + self._view_offsets[None, :]).reshape(-1)
         around = around[self.seen_flag[around] == 0]
-        fresh = _distinct(around, self._stamp_seen)
+        fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh] = 1
         self.covered += np.bincount(fresh // self.PWH, minlength=self.runs)
 
@@ -445,6 +379,7 @@ class World:
         grid[run, rows, max(0, x - v) : min(self.W, x + v + 1)] += delta
 
     def targets_in_view(self, member: int, ix: int, iy: int) -> list[int]:
+        """The unfound targets of the member's run within view of patch (ix, iy)."""
         run = int(self.run_of[member])
         near = (
             (np.abs(self.tx[run] - ix) <= self.v)
@@ -479,6 +414,7 @@ class World:
             self.unfound[run] += 1
 
     def rescue(self, run: int, target: int, tick: int) -> None:
+        """A target was rescued at `tick` (found then, at the latest)."""
         if self.status[run, target] == RESCUED:
             return
         if self.status[run, target] == UNFOUND:

@@ -98,6 +98,7 @@ class LiveRecorder:
             self.discover()
 
     def add_states_topic(self, topic: str) -> None:
+        """Record an `active_states` topic (once)."""
         if topic in self.topics:
             return
         self.topics.add(topic)
@@ -112,6 +113,7 @@ class LiveRecorder:
         )
 
     def discover(self) -> None:
+        """Record every member's `active_states` topic the graph shows now."""
         for topic, types in self.node.get_topic_names_and_types():
             if topic.endswith(f"/{STATES_TOPIC}") and self.states_type in types:
                 self.add_states_topic(topic)
@@ -122,6 +124,7 @@ class LiveRecorder:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """Record a running swarm into a bag until SIGINT/SIGTERM or `--duration`; the exit status."""
     parser = argparse.ArgumentParser(prog="python -m swarmgen.trace.live", description=__doc__)
     parser.add_argument("out", type=Path, help="the new bag directory")
     parser.add_argument("--package", required=True, help="the swarm's interface package")

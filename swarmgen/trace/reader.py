@@ -57,6 +57,8 @@ class RecordedEvent:
 
 @dataclass(frozen=True, slots=True)
 class StateChange:
+    """A member's active states from a stamp on."""
+
     member: str
     states: tuple[str, ...]
     stamp_ns: int
@@ -80,6 +82,7 @@ class Run:
         return self.start_ns
 
     def first(self, name: str) -> RecordedEvent | None:
+        """The first event of that name, None if there is none."""
         return next((e for e in self.events if e.name == name), None)
 
 
@@ -159,6 +162,7 @@ def _stamp(message: Any) -> int:
 
 
 def is_bag(path: Path) -> bool:
+    """Whether `path` is a bag: a directory with metadata.yaml or a bag file."""
     if path.is_dir():
         return (path / "metadata.yaml").is_file()
     return path.is_file() and path.suffix in BAG_SUFFIXES

@@ -54,12 +54,15 @@ class VirtualClock:
         self.now = start_ns
 
     def __call__(self) -> int:
+        """The clock's stamp in nanoseconds (the recorder's clock interface)."""
         return self.now
 
     def set(self, stamp_ns: int) -> None:
+        """Set the clock to a stamp."""
         self.now = stamp_ns
 
     def advance(self, delta_ns: int) -> int:
+        """Move the clock on; the new stamp."""
         self.now += delta_ns
         return self.now
 
@@ -72,29 +75,36 @@ class Traced(Protocol):
     """What a tracer needs of a member (runtime.member.Member, the rclpy MemberNode)."""
 
     @property
-    def member_id(self) -> str: ...
+    def member_id(self) -> str:
+        """The member's id, as the trace names it."""
 
     @property
-    def engine(self) -> _Active: ...
+    def engine(self) -> _Active:
+        """The member's engine, read for its active states."""
 
 
 class TracedEvent(Protocol):
     """The runtime's Event (runtime.engine.Event and the generated packages' vendored copy)."""
 
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The event's name."""
 
     @property
-    def data(self) -> Any: ...
+    def data(self) -> Any:
+        """The event's fields (None: none)."""
 
     @property
-    def id(self) -> int: ...
+    def id(self) -> int:
+        """The event's unique id (with the sender, what the recorder deduplicates on)."""
 
     @property
-    def timestamp(self) -> float: ...
+    def timestamp(self) -> float:
+        """When the event was made, in seconds (0: not stamped)."""
 
     @property
-    def sender(self) -> str: ...
+    def sender(self) -> str:
+        """The id of the member (or station) that sent the event."""
 
 
 def _json(data: Any) -> str:
@@ -164,6 +174,7 @@ class BagRecorder:
     # --- lifecycle
 
     def close(self) -> None:
+        """Close the bag (idempotent)."""
         with self._lock:
             if self._writer is not None:
                 self._writer.close()

@@ -59,10 +59,13 @@ class EventStats:
 
 @dataclass(frozen=True, slots=True)
 class Timeline:
+    """The boxes of every event shown, in order, over `total_runs` runs."""
+
     total_runs: int
     events: tuple[EventStats, ...]
 
     def get(self, event: str) -> EventStats | None:
+        """The box of `event`, None when it is not shown."""
         return next((s for s in self.events if s.event == event), None)
 
 
@@ -180,20 +183,8 @@ def plot(timeline: Timeline, path: Path, *, title: str | None = None) -> None:
     path.write_bytes(data)
 
 
-def render(timeline: Timeline, fmt: str, *, title: str | None = None) -> bytes:
-    """A horizontal box plot like the paper's demonstration figure: one box per event, events
-    from top to bottom in timeline order, time since launch on x; `fmt` "png" or "svg" (the
-    SVG is deterministic: fixed hash salt, no date). Made in memory, so that a command can
-    check everything before it writes a file."""
-    import matplotlib
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    count = len(timeline.events)
-    figure = Figure(figsize=(8.0, 1.2 + 0.45 * max(count, 1)), layout="constrained")
-    FigureCanvasAgg(figure)
-    axes = figure.add_subplot()
-    positions = [count - i for i in range(count)]  # the first event at the top
+def _boxes(timeline: Timeline, positions: list[int]) -> tuple[list[dict[str, Any]], list[int]]:
+    """matplotlib's `bxp` statistics of the events that occurred, and their positions."""
     boxes: list[dict[str, Any]] = []
     box_positions: list[int] = []
     for position, stats in zip(positions, timeline.events, strict=True):
@@ -210,6 +201,24 @@ def render(timeline: Timeline, fmt: str, *, title: str | None = None) -> bytes:
             }
         )
         box_positions.append(position)
+    return boxes, box_positions
+
+
+def render(timeline: Timeline, fmt: str, *, title: str | None = None) -> bytes:
+    """A horizontal box plot like the paper's demonstration figure: one box per event, events
+    from top to bottom in timeline order, time since launch on x; `fmt` "png" or "svg" (the
+    SVG is deterministic: fixed hash salt, no date). Made in memory, so that a command can
+    check everything before it writes a file."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    count = len(timeline.events)
+    figure = Figure(figsize=(8.0, 1.2 + 0.45 * max(count, 1)), layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.add_subplot()
+    positions = [count - i for i in range(count)]  # the first event at the top
+    boxes, box_positions = _boxes(timeline, positions)
     if boxes:
         axes.bxp(
             boxes,

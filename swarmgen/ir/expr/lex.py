@@ -56,9 +56,11 @@ class Lexer:
         self.depth = 0
 
     def fail(self, offset: int, message: str, hint: str | None = None) -> NoReturn:
+        """Raise an ExprError pointing at `offset` in the text."""
         raise error_at(self.text, offset, message, hint)
 
     def run(self) -> list[Tok]:
+        """Tokenize the whole text, ending with an `eof` token."""
         i, n = 0, len(self.text)
         while i < n:
             i = self.step(i)
@@ -66,6 +68,7 @@ class Lexer:
         return self.tokens
 
     def step(self, i: int) -> int:
+        """Read the token (or skip the blank) at `i`; returns the next index."""
         c = self.text[i]
         if c == "\n":
             if self.statements and self.depth == 0:
@@ -83,6 +86,7 @@ class Lexer:
         return self.operator(i)
 
     def number(self, start: int) -> int:
+        """Read a number literal at `start`; returns the next index."""
         match = _NUMBER.match(self.text, start)
         assert match is not None  # step() only calls us on a digit or '.<digit>'
         lexeme = match.group()
@@ -90,6 +94,7 @@ class Lexer:
         return match.end()
 
     def number_value(self, lexeme: str, start: int) -> int | float:
+        """The value of a number lexeme, refusing what the targets cannot hold exactly."""
         if any(c in lexeme for c in ".eE"):
             value = float(lexeme)
             if not math.isfinite(value):
@@ -105,6 +110,7 @@ class Lexer:
         return int(lexeme)
 
     def word(self, start: int) -> int:
+        """Read a name at `start` (refusing reserved `__` names); returns the next index."""
         end = start + 1
         while end < len(self.text) and ("_" + self.text[end]).isidentifier():
             end += 1
@@ -115,6 +121,7 @@ class Lexer:
         return end
 
     def string(self, start: int) -> int:
+        """Read a quoted string at `start`, decoding escapes; returns the next index."""
         quote, i, chars = self.text[start], start + 1, []
         while True:
             if i >= len(self.text) or self.text[i] == "\n":
@@ -153,6 +160,7 @@ class Lexer:
         return chr(int(digits, 16)), i + 2 + len(digits)
 
     def operator(self, i: int) -> int:
+        """Read an operator at `i` (tracking parentheses), or fail with a hint."""
         for op in _OPERATORS:
             if self.text.startswith(op, i):
                 self.depth = self.depth + 1 if op == "(" else self.depth

@@ -91,6 +91,7 @@ class Const(_Model):
     @field_validator("value")
     @classmethod
     def check_value(cls, value: Value) -> Value:
+        """Refuse literal values some target cannot hold exactly."""
         return _check_value(value)
 
 
@@ -117,12 +118,16 @@ class Attr(_Model):
 
 
 class Unary(_Model):
+    """A prefix operator (`not`, `-`) applied to an operand."""
+
     kind: Literal["unary"] = "unary"
     op: UnOp
     operand: Operand
 
 
 class Binary(_Model):
+    """A binary operator (arithmetic, comparison, `and`/`or`) between two operands."""
+
     kind: Literal["binary"] = "binary"
     op: BinOp
     left: Operand
@@ -159,6 +164,8 @@ def _unique_args(args: tuple[Arg, ...]) -> tuple[Arg, ...]:
 
 
 class Assign(_Model):
+    """``name = expr``: set a member data item."""
+
     kind: Literal["assign"] = "assign"
     target: DataName
     value: Operand

@@ -14,6 +14,8 @@ from .member import Behaviour, Outcome, Request
 
 @dataclass(frozen=True)
 class Script:
+    """What a simulated behaviour does: its outcome, duration, outputs and emitted events."""
+
     outcome: str = "succeeded"
     duration: float = 1.0  # seconds, before time_scale
     outputs: Mapping[str, Any] = field(default_factory=dict)
@@ -33,6 +35,7 @@ class SimulatedLibrary:
         self.cancelled: list[tuple[str, str, str]] = []
 
     def get(self, name: str) -> Behaviour | None:
+        """The scripted behaviour for `name` (None: no script)."""
         script = self.scripts.get(name)
         if script is None:
             return None

@@ -15,7 +15,7 @@ import time
 from collections import deque
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any
 
 from .chart import (
     FINALIZE_PREFIX,
@@ -25,70 +25,28 @@ from .chart import (
     Chart,
     Context,
     Node,
-    Record,
     StepBoundExceeded,
     Transition,
     fill,
     record,
 )
+from .configuration import (
+    document_order,
+    entry_set,
+    exit_set,
+    in_final,
+    is_descendant,
+    recorded_history,
+)
+from .host import Event, Host, NullHost
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
 
 
-@dataclass(slots=True)
-class Event:
-    """The paper's event format: name, data, a unique id, a timestamp and the sender's id."""
-
-    name: str
-    data: Record | None = None
-    id: int = 0
-    timestamp: float = 0.0
-    sender: str = ""
-    origin: tuple[str, int] | None = None  # (state id, activation) of a behaviour's outcome
-    # "external", "internal", "platform", or "raised": external, queued by this member's own
-    # `raise e(f = ...)` (the step bound goes on counting through it)
-    kind: str = "external"
-
-
-class Host(Protocol):
-    def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None: ...
-    def cancel_call(self, node: Node, activation: int) -> None: ...
-    def start_timer(self, node: Node, event: str, delay_ms: int) -> None: ...
-    def cancel_timer(self, node: Node, event: str) -> None: ...
-    def send_swarm(self, event: Event) -> None: ...
-    def deliver(self, event: Event) -> None: ...
-
-
-class NullHost:
-    """A host that runs nothing: outcomes and timer events are submitted by hand (tests, replay)."""
-
-    def __init__(self) -> None:
-        self.calls: list[tuple[str, str, dict[str, Any]]] = []
-        self.sent: list[Event] = []
-        self.delivered: list[Event] = []  # events to itself (a `raise` with data)
-        self.timers: dict[str, int] = {}
-
-    def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
-        self.calls.append((node.id, call.behaviour, args))
-
-    def cancel_call(self, node: Node, activation: int) -> None:
-        pass
-
-    def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
-        self.timers[event] = delay_ms
-
-    def cancel_timer(self, node: Node, event: str) -> None:
-        self.timers.pop(event, None)
-
-    def send_swarm(self, event: Event) -> None:
-        self.sent.append(event)
-
-    def deliver(self, event: Event) -> None:
-        self.delivered.append(event)
-
-
 @dataclass
 class Engine:
+    """One member's statechart being interpreted: its configuration, data and event queues."""
+
     chart: Chart
     host: Host = field(default_factory=NullHost)
     member_id: str = ""
@@ -119,6 +77,7 @@ class Engine:
     # --- public
 
     def start(self) -> None:
+        """Enter the initial configuration (one macrostep)."""
         self.running = True
         root = self.chart.root
         if root.initial is None:
@@ -144,6 +103,7 @@ class Engine:
     def make_event(
         self, name: str, data: Mapping[str, Any] | None = None, sender: str = "", **extra: Any
     ) -> Event:
+        """A new event from this engine: the next id, the clock's time."""
         return Event(
             name,
             record(data) if data is not None else None,
@@ -168,6 +128,7 @@ class Engine:
         return self._steps
 
     def is_active(self, node_id: str) -> bool:
+        """Whether the state with this id is in the configuration."""
         if self._active_ids is None:
             self._active_ids = frozenset(n.id for n in self.config)
         return node_id in self._active_ids
@@ -184,6 +145,7 @@ class Engine:
             self.host.deliver(self.make_event(name, data, self.member_id, kind="raised"))
 
     def send_swarm(self, name: str, data: Mapping[str, Any] | None) -> None:
+        """`send e`: the event goes to the swarm, through the host."""
         self.host.send_swarm(self.make_event(name, data, self.member_id))
 
     # --- the algorithm
@@ -202,7 +164,7 @@ class Engine:
         self._start_calls()
 
     def _start_calls(self) -> None:
-        for node in sorted(self._to_invoke, key=_document_order):
+        for node in sorted(self._to_invoke, key=document_order):
             if node in self.config and node.call is not None:
                 activation = self._activation.get(node, 0) + 1
                 self._activation[node] = activation
@@ -229,7 +191,7 @@ class Engine:
 
     def _atomic_states(self) -> list[Node]:
         if self._atomic is None:
-            self._atomic = sorted((n for n in self.config if n.is_atomic), key=_document_order)
+            self._atomic = sorted((n for n in self.config if n.is_atomic), key=document_order)
         return self._atomic
 
     def _select_transitions(self, event: Event | None) -> list[Transition]:
@@ -285,7 +247,7 @@ class Engine:
             to_remove: list[Transition] = []
             for t2 in filtered:
                 if exits1 & exit_sets[id(t2)]:
-                    if _is_descendant(t1.source, t2.source):
+                    if is_descendant(t1.source, t2.source):
                         to_remove.append(t2)
                     else:
                         preempted = True
@@ -304,50 +266,33 @@ class Engine:
         self._atomic = None
 
     def _exit_set(self, transitions: Iterable[Transition]) -> set[Node]:
-        to_exit: set[Node] = set()
-        for transition in transitions:
-            if transition.targets:
-                domain = self._domain(transition)
-                to_exit.update(
-                    s for s in self.config if domain is None or _is_descendant(s, domain)
-                )
-        return to_exit
+        return exit_set(transitions, self.config, self.history)
 
     def _exit_states(self, enabled: list[Transition]) -> None:
-        to_exit = sorted(self._exit_set(enabled), key=_document_order, reverse=True)
+        to_exit = sorted(self._exit_set(enabled), key=document_order, reverse=True)
         self._to_invoke.difference_update(to_exit)
         for state in to_exit:
             for child in state.children:
                 if child.kind == "history":
-                    if child.history == "deep":
-                        recorded = [
-                            s for s in self.config if s.is_atomic and _is_descendant(s, state)
-                        ]
-                    else:
-                        recorded = [s for s in self.config if s.parent is state]
-                    self.history[child] = sorted(recorded, key=_document_order)
+                    self.history[child] = recorded_history(child, state, self.config)
         for state in to_exit:
-            if state.call is not None and state in self._activation:
-                self.host.cancel_call(state, self._activation[state])
-                self._activation[state] += 1  # late outcomes of this activation are stale
-            for event, _ in state.timers:
-                self.host.cancel_timer(state, event)
-            self._run(state.onexit, f"exit of {state.id}")
+            self._leave(state)
             self.config.discard(state)
         self._active_ids = None
         self._atomic = None
 
+    def _leave(self, state: Node) -> None:
+        """Cancel a state's behaviour and timers and run its exit actions."""
+        if state.call is not None and state in self._activation:
+            self.host.cancel_call(state, self._activation[state])
+            self._activation[state] += 1  # late outcomes of this activation are stale
+        for event, _ in state.timers:
+            self.host.cancel_timer(state, event)
+        self._run(state.onexit, f"exit of {state.id}")
+
     def _enter_states(self, enabled: list[Transition]) -> None:
-        to_enter: set[Node] = set()
-        default_entry: set[Node] = set()
-        history_content: dict[Node, Transition] = {}
-        for transition in enabled:
-            for target in transition.targets:
-                self._add_descendants(target, to_enter, default_entry, history_content)
-            ancestor = self._domain(transition)
-            for state in self._effective_targets(transition):
-                self._add_ancestors(state, ancestor, to_enter, default_entry, history_content)
-        for state in sorted(to_enter, key=_document_order):
+        entry = entry_set(enabled, self.history)
+        for state in sorted(entry.to_enter, key=document_order):
             self.config.add(state)
             self._active_ids = None
             self._atomic = None
@@ -355,10 +300,10 @@ class Engine:
             self._run(state.onentry, f"entry of {state.id}")
             for event, delay in state.timers:
                 self.host.start_timer(state, event, delay)
-            if state in default_entry and state.initial is not None:
+            if state in entry.default_entry and state.initial is not None:
                 self._run(state.initial.action, f"initial transition of {state.id}")
-            if state in history_content:
-                self._run(history_content[state].action, f"history default in {state.id}")
+            if state in entry.history_content:
+                self._run(entry.history_content[state].action, f"history default in {state.id}")
             if state.kind == "final":
                 self._reached_final(state)
 
@@ -374,110 +319,17 @@ class Engine:
         if (
             grandparent is not None
             and grandparent.kind == "parallel"
-            and all(self._in_final(c) for c in grandparent.children if c.kind != "history")
+            and all(in_final(c, self.config) for c in grandparent.children if c.kind != "history")
         ):
             self.internal.append(self.make_event(f"done.state.{grandparent.id}", kind="platform"))
 
     def _exit_everything(self) -> None:
         """The machine is done: behaviours are cancelled and exit actions run; the final
         configuration stays visible (as Qt SCXML reports it) for traces."""
-        for state in sorted(self.config, key=_document_order, reverse=True):
-            if state.call is not None and state in self._activation:
-                self.host.cancel_call(state, self._activation[state])
-                self._activation[state] += 1
-            for event, _ in state.timers:
-                self.host.cancel_timer(state, event)
-            self._run(state.onexit, f"exit of {state.id}")
+        for state in sorted(self.config, key=document_order, reverse=True):
+            self._leave(state)
         self._to_invoke.clear()
         self.internal.clear()
-
-    def _in_final(self, state: Node) -> bool:
-        if state.kind == "parallel":
-            return all(self._in_final(c) for c in state.children if c.kind != "history")
-        if state.is_compound:
-            return any(c.kind == "final" and c in self.config for c in state.children)
-        return False
-
-    def _add_descendants(
-        self,
-        state: Node,
-        to_enter: set[Node],
-        default_entry: set[Node],
-        history_content: dict[Node, Transition],
-    ) -> None:
-        if state.kind == "history":
-            parent = state.parent
-            assert parent is not None
-            recorded = self.history.get(state)
-            if recorded:
-                for s in recorded:
-                    self._add_descendants(s, to_enter, default_entry, history_content)
-                for s in recorded:
-                    self._add_ancestors(s, parent, to_enter, default_entry, history_content)
-            elif state.initial is not None:
-                history_content[parent] = state.initial
-                for s in state.initial.targets:
-                    self._add_descendants(s, to_enter, default_entry, history_content)
-                for s in state.initial.targets:
-                    self._add_ancestors(s, parent, to_enter, default_entry, history_content)
-            return
-        to_enter.add(state)
-        if state.is_compound:
-            default_entry.add(state)
-            targets = state.initial.targets if state.initial is not None else _first_child(state)
-            for s in targets:
-                self._add_descendants(s, to_enter, default_entry, history_content)
-            for s in targets:
-                self._add_ancestors(s, state, to_enter, default_entry, history_content)
-        elif state.kind == "parallel":
-            for child in state.children:
-                if child.kind != "history" and not any(_is_descendant(s, child) for s in to_enter):
-                    self._add_descendants(child, to_enter, default_entry, history_content)
-
-    def _add_ancestors(
-        self,
-        state: Node,
-        ancestor: Node | None,
-        to_enter: set[Node],
-        default_entry: set[Node],
-        history_content: dict[Node, Transition],
-    ) -> None:
-        for anc in state.ancestors:
-            if anc is ancestor or anc.kind == "scxml":
-                break
-            to_enter.add(anc)
-            if anc.kind == "parallel":
-                for child in anc.children:
-                    if child.kind != "history" and not any(
-                        _is_descendant(s, child) for s in to_enter
-                    ):
-                        self._add_descendants(child, to_enter, default_entry, history_content)
-
-    def _effective_targets(self, transition: Transition) -> list[Node]:
-        found: list[Node] = []
-        for target in transition.targets:
-            if target.kind == "history":
-                recorded = self.history.get(target)
-                if recorded:
-                    found.extend(recorded)
-                elif target.initial is not None:
-                    found.extend(self._effective_targets(target.initial))
-            else:
-                found.append(target)
-        return found
-
-    def _domain(self, transition: Transition) -> Node | None:
-        targets = self._effective_targets(transition)
-        if not targets:
-            return None
-        source = transition.source
-        if (
-            transition.internal
-            and source.is_compound
-            and all(_is_descendant(t, source) for t in targets)
-        ):
-            return source
-        return _lcca([source, *targets])
 
     # --- executable content
 
@@ -503,27 +355,3 @@ class Engine:
         self.internal.append(self.make_event("error.execution", None, kind="platform"))
         if self.on_error is not None:
             self.on_error(where, err)
-
-
-def _document_order(node: Node) -> int:
-    return node.order
-
-
-def _is_descendant(node: Node, ancestor: Node) -> bool:
-    return ancestor in node.ancestors
-
-
-def _first_child(state: Node) -> tuple[Node, ...]:
-    for child in state.children:
-        if child.kind != "history":
-            return (child,)
-    return ()
-
-
-def _lcca(states: list[Node]) -> Node | None:
-    """Least common compound ancestor (the root counts as compound)."""
-    head, rest = states[0], states[1:]
-    for anc in head.ancestors:
-        if anc.kind in {"state", "scxml"} and all(_is_descendant(s, anc) for s in rest):
-            return anc
-    return None

@@ -18,7 +18,6 @@ import asyncio
 import contextlib
 import importlib
 import json
-import math
 import os
 import sys
 import threading
@@ -27,6 +26,7 @@ from collections.abc import Callable, Mapping, Sequence
 from types import ModuleType
 from typing import Any, NoReturn
 
+from .args import Parser, finite
 from .engine import Event
 from .member import CANCEL_GRACE, Fault, InMemoryBus, Library, Member
 
@@ -36,12 +36,15 @@ HARD_SLACK = 1.0  # seconds past duration + grace after which the process ends r
 
 
 class JsonTracer:
+    """Writes the trace of a run as JSON lines: one per step, one per fault."""
+
     def __init__(self, out: Any = sys.stdout) -> None:
         self.out = out
         self.start = time.monotonic()
         self.lock = threading.Lock()  # the watchdog thread writes its last line too
 
     def step(self, member: Member, event: Event | None) -> None:
+        """Write a step: the time, the member, the event and the active states."""
         self._write(
             {
                 "t": round(time.monotonic() - self.start, 4),
@@ -52,6 +55,7 @@ class JsonTracer:
         )
 
     def fault(self, member: Member, fault: Fault, timeout: float = -1) -> None:
+        """Write a behaviour fault (`timeout`: how long to wait for the lock)."""
         self._write(
             {
                 "t": round(time.monotonic() - self.start, 4),
@@ -72,29 +76,12 @@ class JsonTracer:
                 self.lock.release()
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        """One line on stderr, exit 2 (argparse would print the usage first)."""
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
-
-
-def _number(text: str, low: float, low_ok: bool) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not math.isfinite(value) or value < low or (value == low and not low_ok):
-        bound = f">= {low:g}" if low_ok else f"> {low:g}"
-        raise argparse.ArgumentTypeError(f"expected a finite number {bound}, got {text!r}")
-    return value
-
-
 def _seconds(text: str) -> float:
-    return _number(text, 0.0, low_ok=True)
+    return finite(text, 0.0, low_ok=True)
 
 
 def _scale(text: str) -> float:
-    return _number(text, 0.0, low_ok=False)
+    return finite(text, 0.0, low_ok=False)
 
 
 def _member_id(text: str) -> str:
@@ -140,8 +127,8 @@ def station_events(text: str, known: Callable[[str], bool]) -> list[tuple[float,
     return sorted(events)
 
 
-def _parser(prog: str, member_types: Mapping[str, ModuleType]) -> _Parser:
-    parser = _Parser(prog=prog, description="Run swarm members with simulated behaviours.")
+def _parser(prog: str, member_types: Mapping[str, ModuleType]) -> Parser:
+    parser = Parser(prog=prog, description="Run swarm members with simulated behaviours.")
     who = parser.add_mutually_exclusive_group(required=True)
     who.add_argument("--member", choices=sorted(member_types), help="member type to run")
     who.add_argument("--swarm", action="store_true", help="run the whole swarm composition")
@@ -176,6 +163,7 @@ def main(
     prog: str = "swarm",
     argv: list[str] | None = None,
 ) -> int:
+    """The generated package's command line: run members with simulated behaviours."""
     parser = _parser(prog, member_types)
     args = parser.parse_args(argv)
     charts = {kind: module.build() for kind, module in member_types.items()}
@@ -293,11 +281,13 @@ class Watchdog:
         self._handle: asyncio.TimerHandle | None = None
 
     def start(self, loop: asyncio.AbstractEventLoop) -> None:
+        """Start beating on `loop` and watching it from a thread."""
         self.loop = loop
         self._beat()
         threading.Thread(target=self._watch, name="swarm watchdog", daemon=True).start()
 
     def stop(self) -> None:
+        """Stop watching."""
         self._stopped.set()
         if self._handle is not None:
             self._handle.cancel()

@@ -94,6 +94,8 @@ class Call:
 
 @dataclass(eq=False, slots=True)
 class Node:
+    """A state of the chart (or the root, or a history node), linked by ChartBuilder.build()."""
+
     id: str
     kind: str  # "scxml" (the root), "state", "parallel", "final", "history"
     name: str = ""
@@ -144,6 +146,8 @@ class Node:
 
 @dataclass(eq=False, slots=True)
 class Transition:
+    """A transition: its source, event descriptors, targets, guard and action."""
+
     source: Node
     events: tuple[str, ...]
     targets: tuple[Node, ...]
@@ -166,6 +170,8 @@ class Transition:
 
 @dataclass(slots=True)
 class Chart:
+    """A member's built statechart: its nodes, initial data and event field defaults."""
+
     name: str
     root: Node
     nodes: dict[str, Node]
@@ -174,6 +180,7 @@ class Chart:
     events: dict[str, dict[str, Any]] = field(default_factory=dict)  # event -> field defaults
 
     def fresh_data(self) -> Record:
+        """A new copy of the initial member data, as Records."""
         return Record({key: record(value) for key, value in self.data.items()})
 
 
@@ -194,12 +201,15 @@ class Context:
         return data if isinstance(data, Record) else Record()
 
     def is_active(self, node_id: str) -> bool:
+        """`In(state)`: whether the state is active."""
         return bool(self._engine.is_active(node_id))
 
     def raise_event(self, name: str, data: Mapping[str, Any] | None = None) -> None:
+        """`raise e`: an event to this member (the engine decides which queue)."""
         self._engine.raise_internal(name, data)
 
     def send(self, name: str, data: Mapping[str, Any] | None = None) -> None:
+        """`send e`: an event to the swarm."""
         self._engine.send_swarm(name, data)
 
     def field(self, name: str) -> Any:
@@ -245,6 +255,7 @@ class ChartBuilder:
         timers: Sequence[tuple[str, int]] = (),
         history: str = "",
     ) -> None:
+        """Declare a node under `parent` (None: the root), after its parent."""
         if node_id in self._nodes or not node_id:
             raise ValueError(f"duplicate or empty node id {node_id!r}")
         owner = self._nodes[parent] if parent is not None else self._root
@@ -268,6 +279,7 @@ class ChartBuilder:
         internal: bool = False,
         bounded: bool = False,
     ) -> None:
+        """Declare a transition of `source`; targets are resolved by build()."""
         options = {"cond": cond, "action": action, "internal": internal, "bounded": bounded}
         self._pending.append((source, tuple(events), tuple(targets), options))
 
@@ -279,6 +291,7 @@ class ChartBuilder:
         self._initials.append((parent, tuple(targets), action))
 
     def build(self) -> Chart:
+        """Link the declared nodes and transitions into a Chart, in document order."""
         order = 0
         stack: list[tuple[Node, int, tuple[Node, ...]]] = [(self._root, 0, ())]
         while stack:  # document order, depth and ancestors

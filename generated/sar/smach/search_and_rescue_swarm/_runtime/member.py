@@ -56,16 +56,25 @@ Behaviour = Callable[[Request], Awaitable[Outcome]]
 class Library(Protocol):
     """The platform's Abstraction Library: a behaviour implementation per behaviour name."""
 
-    def get(self, name: str) -> Behaviour | None: ...
+    def get(self, name: str) -> Behaviour | None:
+        """The behaviour implementing `name` (None: the library has none)."""
 
 
 class Bus(Protocol):
-    def attach(self, member: Member) -> None: ...
-    def publish(self, event: Event, scope: str) -> None: ...
+    """How members exchange swarm events."""
+
+    def attach(self, member: Member) -> None:
+        """Deliver the swarm's events to `member` from now on."""
+
+    def publish(self, event: Event, scope: str) -> None:
+        """Send `event` to the members `scope` names ("swarm" or "local")."""
 
 
 class Tracer(Protocol):
-    def step(self, member: Member, event: Event | None) -> None: ...
+    """Sees every step of a member."""
+
+    def step(self, member: Member, event: Event | None) -> None:
+        """After the member started (`event` None) or processed `event`."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,9 +100,11 @@ class InMemoryBus:
         self.log: list[Event] = []
 
     def attach(self, member: Member) -> None:
+        """Deliver the swarm's events to `member` from now on."""
         self.members[member.member_id] = member
 
     def publish(self, event: Event, scope: str) -> None:
+        """Log `event` and deliver it by its scope."""
         self.log.append(event)
         if scope == "local":
             target = self.members.get(event.sender)
@@ -183,13 +194,16 @@ class Member:
             await self._cancel_all()
 
     def stop(self) -> None:
+        """End `run()` after the events already queued."""
         self.queue.put_nowait(None)
 
     def deliver(self, event: Event) -> None:
+        """Queue an event for the engine."""
         self.queue.put_nowait(event)
 
     @property
     def active(self) -> list[str]:
+        """Ids of the active states, sorted."""
         return self.engine.active()
 
     @property
@@ -202,6 +216,7 @@ class Member:
             self.tracer.step(self, event)
 
     def add_error(self, text: str) -> None:
+        """Count an error and keep its text (up to MAX_KEPT_ERRORS)."""
         self.error_total += 1
         if len(self.errors) < MAX_KEPT_ERRORS:
             self.errors.append(text)
@@ -232,6 +247,7 @@ class Member:
     # --- engine host
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
+        """Start a state's behaviour as a task; its outcome comes back as an event."""
         try:
             behaviour = self.library.get(call.behaviour)
         except BEHAVIOUR_FAILURES as err:
@@ -318,6 +334,7 @@ class Member:
         return None
 
     def cancel_call(self, node: Node, activation: int) -> None:
+        """Cancel a state's behaviour; it gets a grace period to end."""
         task = self.tasks.pop(node, None)
         if task is not None and not task.done():
             self._cancel(task, node, "on preemption")
@@ -354,6 +371,7 @@ class Member:
         self.report(Fault("abandoned", behaviour, node.id, error))
 
     def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
+        """Deliver `event` after `delay_ms`."""
         loop = asyncio.get_running_loop()
         self.timers[event] = loop.call_later(
             delay_ms / 1000,
@@ -361,11 +379,13 @@ class Member:
         )
 
     def cancel_timer(self, node: Node, event: str) -> None:
+        """Cancel the timer of `event`."""
         handle = self.timers.pop(event, None)
         if handle is not None:
             handle.cancel()
 
     def send_swarm(self, event: Event) -> None:
+        """Publish `event` on the bus, in its declared scope."""
         self.bus.publish(event, self.event_scopes.get(event.name, "swarm"))
 
     def _emit(self, name: str, data: Mapping[str, Any] | None, scope: str = "swarm") -> None:

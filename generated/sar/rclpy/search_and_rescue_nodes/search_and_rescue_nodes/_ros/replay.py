@@ -36,26 +36,17 @@ from typing import Any
 
 import rclpy
 from rclpy.action.server import CancelResponse
-from rclpy.callback_groups import ReentrantCallbackGroup
 from rclpy.context import Context as RosContext
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from .._runtime.replay import describe, expand, outcome_event, running_state
-from .node import (
-    EVENTS_QOS,
-    SWARM_TOPIC,
-    BehaviourSpec,
-    Interfaces,
-    MemberNode,
-    MemberOptions,
-    MemberSpec,
-    Scheduler,
-    encode,
-    ros_time,
-    spin_until,
-)
-from .simulated import scripted_server
+from .messages import EVENTS_QOS, SWARM_TOPIC, Interfaces, encode
+from .node import MemberNode, MemberOptions
+from .process import spin_until
+from .scheduler import Scheduler
+from .servers import scripted_servers
+from .spec import BehaviourSpec, MemberSpec
 
 NAMESPACE = "/replay"
 MEMBER_ID = "replay"
@@ -79,33 +70,20 @@ class Driver(Node):
         self.next_id = 0
         self.started = 0  # goals the servers accepted
         self._publisher = self.create_publisher(self.interfaces.Event, SWARM_TOPIC, EVENTS_QOS)
-        group = ReentrantCallbackGroup()
-        self.servers = [
-            scripted_server(
-                self,
-                self.interfaces.action(behaviour.action),
-                behaviour.ros_name,
-                partial(self._accepted, behaviour),
-                self._on_cancel,
-                group,
-            )
-            for _, behaviour in sorted(spec.behaviours.items())
-        ]
+        self.servers = scripted_servers(
+            self, self.interfaces, spec.behaviours, self._accepted, self._on_cancel
+        )
 
     def publish(self, name: str, data: Any) -> int:
+        """Publish a station event; its id."""
         self.next_id += 1
-        self._publisher.publish(
-            self.interfaces.Event(
-                id=self.next_id,
-                stamp=ros_time(self.get_clock().now().nanoseconds / 1e9),
-                sender="station",
-                name=name,
-                data=json.dumps(data if data is not None else {}),
-            )
-        )
+        stamp = self.get_clock().now().nanoseconds / 1e9
+        text = json.dumps(data if data is not None else {})
+        self._publisher.publish(self.interfaces.event(self.next_id, stamp, "station", name, text))
         return self.next_id
 
     def subscribed(self) -> bool:
+        """The member hears the station."""
         return self._publisher.get_subscription_count() > 0
 
     def _accepted(self, behaviour: BehaviourSpec, handle: Any) -> None:
@@ -141,6 +119,8 @@ class Driver(Node):
 
 
 class Replay:
+    """One member node and its driver, replaying scenario after scenario."""
+
     def __init__(self, spec: MemberSpec, context: RosContext) -> None:
         self.spec = spec
         self.executor = SingleThreadedExecutor(context=context)
@@ -160,12 +140,15 @@ class Replay:
         self.settle(lambda: self.member.servers_ready() and self.driver.subscribed())
 
     def close(self) -> None:
+        """Stop the member and destroy the nodes."""
         self.member.stop()
         self.executor.shutdown()
         self.member.destroy_node()
         self.driver.destroy_node()
 
     def settle(self, condition: Callable[[], bool] = lambda: True) -> None:
+        """Spin until `condition` holds and the member is idle (ReplayTimeout otherwise)."""
+
         def quiet() -> bool:
             member = self.member
             running = member.running_goal_ids()
@@ -179,6 +162,7 @@ class Replay:
             )
 
     def run(self, steps: Sequence[Step]) -> list[dict[str, Any]]:
+        """Replay one scenario from a fresh member; its trace (one record per step)."""
         member = self.member
         member.reset()
         member.start()
@@ -255,6 +239,7 @@ class Replay:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """`python -m <package>._ros.replay MODULE SCENARIOS`: one JSON line per scenario."""
     args = list(sys.argv[1:] if argv is None else argv)
     if len(args) != 2:
         print(

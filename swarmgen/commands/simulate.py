@@ -1,0 +1,141 @@
+"""`swarmgen simulate`: a model's compiled behaviours in the paper's abstract world, swept over
+member and target counts, with its statistics, tables and figures."""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import click
+
+from swarmgen import console, pipeline
+from swarmgen import diagnostics as dg
+from swarmgen.commands.common import MODEL, PATH, check_record, guarded, record_options
+
+if TYPE_CHECKING:
+    from swarmgen.sim.scenario import Scenario
+
+
+@click.command()
+@MODEL
+@click.option(
+    "--scenario", default="coverage", show_default=True, metavar="coverage|sar|PATH",
+    help="A shipped scenario (the paper's two) or a scenario file (JSON); see docs/simulate.md.",
+)  # fmt: skip
+@click.option(
+    "--members", "members", multiple=True, metavar="TYPE=N[,N...]",
+    help="Member counts to sweep, e.g. UAV=1,2,4,8 (repeatable); overrides the scenario.",
+)  # fmt: skip
+@click.option("--targets", metavar="N[,N...]", help="Target counts to sweep, e.g. 1,2,4,8,16,32.")
+@click.option("--reps", type=click.IntRange(1, 10_000), help="Repetitions per configuration.")
+@click.option(
+    "--seed", type=click.IntRange(0, 2**63 - 1), help="Random seed (same seed, same numbers)."
+)
+@click.option(
+    "--workers", type=click.IntRange(1, 256), default=1, show_default=True,
+    help="Processes to spread configurations over (results do not depend on it).",
+)  # fmt: skip
+@click.option(
+    "-o", "--output", type=PATH,
+    help="Write tables (CSV), results.json and figures (PNG, SVG) here, replaced atomically.",
+)  # fmt: skip
+@record_options(
+    "Also write one ROS 2 bag per run, DIR/<configuration>-<rep>, into this new directory."
+)
+@guarded
+def simulate(
+    model: Path,
+    scenario: str,
+    members: tuple[str, ...],
+    targets: str | None,
+    reps: int | None,
+    seed: int | None,
+    workers: int,
+    output: Path | None,
+    record: Path | None,
+    storage: str,
+) -> None:
+    """Run MODEL's compiled behaviours in the paper's abstract world and report the statistics."""
+    from swarmgen.sim import run as sim_run
+
+    check_record(record)
+    started = time.perf_counter()
+    chosen = _sweep(scenario, members, targets, reps, seed)
+    _check_sweep(model, chosen)
+    progress = _ProgressBar(started)
+    sim, files = sim_run.simulate_model(model, chosen, output, workers, progress, record, storage)
+    if output is None:
+        _print_tables(files)
+    errors = sum(len(r.errors) for r in sim.runs)
+    unfinished = sum(1 for r in sim.runs if r.reason in ("max_ticks", "stalled"))
+    where = f" -> {console.shown(output)}" if output is not None else ""
+    click.echo(
+        f"swarmgen: {console.shown(model)}{where}: {len(sim.runs)} runs of "
+        f"{len(sim.configs)} configuration(s) in {time.perf_counter() - started:.1f} s; "
+        f"{unfinished} did not reach the stop "
+        f"condition; {errors} behaviour error(s)",
+        err=True,
+    )
+    if record is not None:
+        click.echo(f"swarmgen: recorded {len(sim.runs)} run(s) into {record} ({storage})", err=True)
+
+
+def _sweep(
+    scenario: str, members: tuple[str, ...], targets: str | None, reps: int | None,
+    seed: int | None,
+) -> Scenario:  # fmt: skip
+    """The chosen scenario with the command line's member and target counts, reps and seed."""
+    from swarmgen.sim import scenario as sim_scenario
+
+    chosen = sim_scenario.load(scenario)
+    counts: dict[str, list[int]] = {}
+    for item in members:
+        counts.update(sim_scenario.parse_members(item))
+    target_counts = sim_scenario.parse_counts(targets, "--targets") if targets else None
+    return chosen.with_overrides(counts, target_counts, reps, seed)
+
+
+def _print_tables(files: dict[str, bytes]) -> None:
+    """Without -o: the coverage table on stdout, then the search and rescue tables if any."""
+    click.echo(files.get("coverage.csv", b"").decode(), nl=False)
+    for name in ("search.csv", "rescue.csv"):
+        if name in files:
+            click.echo(f"\n# {name}\n{files[name].decode()}", nl=False)
+
+
+class _ProgressBar:
+    """simulate's progress on stderr: redrawn in place on a terminal, else one line per tenth."""
+
+    WIDTH = 30
+
+    def __init__(self, started: float) -> None:
+        """A bar for a simulation that started at `started` (time.perf_counter)."""
+        self.started = started
+        self.shown = -1
+
+    def __call__(self, done: int, total: int) -> None:
+        """Show that `done` of `total` runs are finished."""
+        filled = self.WIDTH * done // max(1, total)
+        tenth = 10 * done // max(1, total)
+        if sys.stderr.isatty() or tenth != self.shown or done == total:
+            self.shown = tenth
+            end = "" if sys.stderr.isatty() and done < total else "\n"
+            sys.stderr.write(
+                f"\rswarmgen: simulate [{'#' * filled}{'.' * (self.WIDTH - filled)}] "
+                f"{done}/{total} runs {time.perf_counter() - self.started:.1f} s{end}"
+            )
+            sys.stderr.flush()
+
+
+def _check_sweep(model: Path, chosen: Scenario) -> None:
+    """The sweep's limits and the member types of --members, before anything runs (a model
+    with errors is reported by the simulation itself)."""
+    from swarmgen.ir.query import composition
+    from swarmgen.sim import scenario as sim_scenario
+
+    validation = pipeline.validate(model)
+    if validation.model is not None and not dg.has_errors(validation.diagnostics):
+        types = [t.name for t in validation.model.member_types if t.machine]
+        sim_scenario.check(chosen, types, composition(validation.model))

@@ -1,0 +1,69 @@
+"""The diagrams' texts: transition labels, effects and triggers in the model's own notation,
+each one line and clipped to a limit (raw, unescaped: each renderer escapes for its format)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+from swarmgen.ir import expr
+from swarmgen.ir import nodes as ir
+from swarmgen.names import one_line
+
+GUARD_LIMIT = 40
+EFFECT_LIMIT = 60
+TRIGGER_LIMIT = 40
+ACTIVITY_LIMIT = 48
+
+
+def clip(text: str, limit: int) -> str:
+    """One line, at most `limit` characters (an ellipsis marks the cut)."""
+    flat = " ".join(one_line(text).split())
+    return flat if len(flat) <= limit else flat[: limit - 1].rstrip() + "…"
+
+
+def _args_text(args: Sequence[expr.Arg]) -> str:
+    return ", ".join(f"{a.name} = {expr.to_text(a.value)}" for a in args)
+
+
+def action_text(action: expr.Action) -> str:
+    """An effect in the model's action language."""
+    match action:
+        case expr.Assign():
+            return f"{action.target} = {expr.to_text(action.value)}"
+        case expr.Raise() | expr.Send():
+            verb = "raise" if isinstance(action, expr.Raise) else "send"
+            args = f"({_args_text(action.args)})" if action.args else ""
+            return f"{verb} {action.event}{args}"
+
+
+def actions_text(actions: Iterable[expr.Action], opaque: Iterable[ir.OpaqueCode]) -> str:
+    """Actions, then opaque code (as `<language code>`), separated by semicolons."""
+    parts = [action_text(a) for a in actions]
+    parts += [f"<{o.language} code>" for o in opaque]
+    return "; ".join(parts)
+
+
+def trigger_text(trigger: ir.Trigger) -> str:
+    """A trigger as the model writes it: `after N ms`, `*` or the event's name."""
+    if trigger.kind == ir.TriggerKind.TIME and trigger.delay_ms is not None:
+        return f"after {trigger.delay_ms} ms"
+    if trigger.kind == ir.TriggerKind.ANY:
+        return "*"
+    return trigger.name
+
+
+def transition_label(transition: ir.Transition) -> tuple[str, ...]:
+    """`event`, `[guard]`, `/ effect` (the parts that are there), each one line and clipped."""
+    parts: list[str] = []
+    triggers = ", ".join(trigger_text(t) for t in transition.triggers)
+    if triggers:
+        parts.append(clip(triggers, TRIGGER_LIMIT))
+    guard = expr.to_text(transition.guard) if transition.guard is not None else None
+    guard = guard or transition.guard_text
+    if guard:
+        parts.append(f"[{clip(guard, GUARD_LIMIT)}]")
+    opaque = [o for o in transition.opaque if o.role == "effect"]
+    effect = actions_text(transition.effect, opaque)
+    if effect:
+        parts.append(f"/ {clip(effect, EFFECT_LIMIT)}")
+    return tuple(parts)

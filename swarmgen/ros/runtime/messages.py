@@ -1,0 +1,111 @@
+"""The ROS side of the swarm: topics, their QoS, the interface package's types, and values
+converted between the engine and ROS message fields."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import math
+from functools import cache
+from types import ModuleType
+from typing import Any
+
+from builtin_interfaces.msg import Time
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+SWARM_TOPIC = "/swarm/events"
+LOCAL_TOPIC = "local_events"  # behaviour events of local scope, inside one member's namespace
+STATES_TOPIC = "active_states"
+EVENTS_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1000,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.VOLATILE,
+)
+# The latest configuration is kept for late subscribers (a monitor that starts after the swarm).
+STATES_QOS = QoSProfile(
+    history=HistoryPolicy.KEEP_LAST,
+    depth=1,
+    reliability=ReliabilityPolicy.RELIABLE,
+    durability=DurabilityPolicy.TRANSIENT_LOCAL,
+)
+INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+
+
+def encode(type_: str, value: Any) -> Any:
+    """A Python value as the ROS field of `type_` holds it (lenient: unusable values give the
+    field's zero value; JSON fields give `""` for a value that is absent)."""
+    if type_ == "json":
+        return "" if value is None else json.dumps(value, default=str, sort_keys=True)
+    if type_ == "string":
+        return value if isinstance(value, str) else ("" if value is None else str(value))
+    if type_ == "bool":
+        return bool(value) if isinstance(value, bool | int | float) else False
+    if type_ == "int64":  # out of range would fail when the message is sent, in the executor
+        if isinstance(value, bool | int | float) and INT64_MIN <= value <= INT64_MAX:
+            return int(value)
+        return 0
+    if type_ == "float64":
+        return float(value) if isinstance(value, bool | int | float) else 0.0
+    raise ValueError(f"unknown field type {type_!r}")
+
+
+def fits(type_: str, value: Any) -> bool:
+    """`value` is one the ROS field of `type_` carries as it is (None: not given, the zero),
+    not one `encode` would replace by the zero: what a behaviour's output must be."""
+    if value is None or type_ in ("json", "string"):
+        return True
+    if type_ == "bool":
+        return isinstance(value, bool)
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    if type_ == "int64":
+        return number and isinstance(value, int) and INT64_MIN <= value <= INT64_MAX
+    return number and math.isfinite(float(value)) if type_ == "float64" else False
+
+
+def decode(type_: str, value: Any) -> tuple[bool, Any]:
+    """(present, value) of a ROS field; an empty JSON field is absent."""
+    if type_ == "json":
+        if value == "":
+            return False, None
+        try:
+            return True, json.loads(value)
+        except ValueError:
+            return True, value
+    if type_ == "float64":
+        return True, float(value)
+    return True, value
+
+
+def ros_time(seconds: float) -> Time:
+    """Seconds since the epoch as a ROS `Time` stamp."""
+    whole = math.floor(seconds)
+    return Time(sec=int(whole), nanosec=int((seconds - whole) * 1e9))
+
+
+def from_ros_time(stamp: Any) -> float:
+    """A ROS `Time` stamp as seconds since the epoch."""
+    return float(stamp.sec) + float(stamp.nanosec) / 1e9
+
+
+@cache
+def _module(name: str) -> ModuleType:
+    return importlib.import_module(name)
+
+
+class Interfaces:
+    """The generated interface package's types, imported by name (the runtime is generic)."""
+
+    def __init__(self, package: str) -> None:
+        self.package = package
+        msg = _module(f"{package}.msg")
+        self.Event: Any = msg.Event
+        self.ActiveStates: Any = msg.ActiveStates
+
+    def action(self, name: str) -> Any:
+        """The action type `name` of the package."""
+        return getattr(_module(f"{self.package}.action"), name)
+
+    def event(self, ident: int, stamp: float, sender: str, name: str, data: str) -> Any:
+        """An `Event` message; `data` is the JSON text of the event's fields."""
+        return self.Event(id=ident, stamp=ros_time(stamp), sender=sender, name=name, data=data)

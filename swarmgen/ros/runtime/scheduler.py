@@ -1,0 +1,82 @@
+"""One-shot callbacks on one ROS timer, shared by the nodes of a process."""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+import time
+from collections.abc import Callable
+
+from rclpy.node import Node
+from rclpy.timer import Timer
+
+
+class Handle:
+    """A scheduled callback; `cancel` keeps it from running."""
+
+    __slots__ = ("callback", "cancelled", "when")
+
+    def __init__(self, when: float, callback: Callable[[], None]) -> None:
+        self.when = when
+        self.callback = callback
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        """The callback will not run."""
+        self.cancelled = True
+
+
+class Scheduler:
+    """`call_later` on a single rclpy timer, re-armed for the earliest deadline.
+
+    rclpy slows down (and warns) with many timers on one clock, and scripted behaviours and model
+    timers need many short-lived delays; so a process shares one scheduler between its nodes.
+    Callbacks run in the executor, like every other callback.
+    """
+
+    def __init__(self, node: Node) -> None:
+        self._heap: list[tuple[float, int, Handle]] = []
+        self._order = itertools.count()
+        self._armed: float | None = None
+        self._logger = node.get_logger()
+        self._timer: Timer = node.create_timer(3600.0, self._fire, autostart=False)
+
+    def call_later(self, delay: float, callback: Callable[[], None]) -> Handle:
+        """Run `callback` in the executor after `delay` seconds (at once for 0 or less)."""
+        handle = Handle(time.monotonic() + max(0.0, delay), callback)
+        heapq.heappush(self._heap, (handle.when, next(self._order), handle))
+        self._arm()
+        return handle
+
+    def __len__(self) -> int:
+        return sum(1 for _, _, h in self._heap if not h.cancelled)
+
+    def _arm(self) -> None:
+        while self._heap and self._heap[0][2].cancelled:
+            heapq.heappop(self._heap)
+        if not self._heap:
+            if self._armed is not None:
+                self._timer.cancel()
+                self._armed = None
+            return
+        when = self._heap[0][0]
+        if self._armed is not None and self._armed <= when:
+            return  # already armed for this deadline or an earlier one
+        delay = max(when - time.monotonic(), 0.0)
+        self._timer.timer_period_ns = max(1000, int(delay * 1e9))
+        self._timer.reset()
+        self._armed = when
+
+    def _fire(self) -> None:
+        self._armed = None
+        now = time.monotonic()
+        while self._heap and self._heap[0][0] <= now:
+            _, _, handle = heapq.heappop(self._heap)
+            if handle.cancelled:
+                continue
+            handle.cancelled = True
+            try:
+                handle.callback()
+            except Exception as err:  # a failing callback must not stop the others
+                self._logger.error(f"scheduled callback failed: {err!r}")
+        self._arm()

@@ -1,0 +1,74 @@
+"""What generated member modules declare: a member type, its behaviours and its parameters."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from ...runtime.chart import Chart
+
+
+@dataclass(frozen=True, slots=True)
+class Field:
+    """A behaviour input or output: its model identifier, its ROS field and how it is encoded.
+
+    `type` is the ROS field type (`float64`, `int64`, `bool`, `string`) or `json`: a `string`
+    field carrying the JSON text of a value of a model DataType (`Pose`) or of no declared type.
+    """
+
+    name: str
+    field: str
+    type: str
+
+
+@dataclass(frozen=True, slots=True)
+class BehaviourSpec:
+    """A behaviour of the library as a ROS 2 action of the interface package."""
+
+    name: str  # the model's behaviour name (what `Call.behaviour` holds)
+    action: str  # action type in the interface package
+    ros_name: str  # action name, relative to the member's namespace
+    kind: str  # ComplexBehavior, SwarmBehavior, SwarmFunction, HardwareFunction
+    inputs: tuple[Field, ...] = ()
+    outputs: tuple[Field, ...] = ()
+    outcomes: tuple[str, ...] = ()
+    # rosKind, rosName, rosType as the model declares them ("" when absent): metadata only
+    declared: tuple[str, str, str] = ("", "", "")
+
+
+@dataclass(frozen=True, slots=True)
+class Parameter:
+    """A ROS parameter of the member node; `data` names the member data item it initialises."""
+
+    name: str
+    type: str  # float64, int64, bool, string or json (a string parameter holding JSON)
+    default: Any
+    data: str | None = None
+    read_only: bool = False
+    description: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class MemberSpec:
+    """A member type: its chart, its node name, its events' scopes, behaviours and parameters."""
+
+    member_type: str  # the model's member type name
+    chart_name: str  # identifier of the member type (module, script keys)
+    node_name: str  # ROS node name (lower snake case)
+    interfaces: str  # the interface package
+    build: Callable[[], Chart]
+    event_scopes: Mapping[str, str]  # event this member sends -> "swarm" or "local"
+    behaviours: Mapping[str, BehaviourSpec]
+    parameters: tuple[Parameter, ...] = ()
+
+
+def namespace_id(namespace: str, fallback: str) -> str:
+    """The default member id of a node: its namespace (`/uav_1` -> `uav_1`), else `fallback`."""
+    return namespace.strip("/").replace("/", "_") or fallback
+
+
+def index_of(member_id: str) -> int:
+    """`uav_3` -> 3 (members are numbered from 1 within their type); 1 when there is no number."""
+    tail = member_id.rsplit("_", 1)[-1]
+    return int(tail) if tail.isdigit() else 1

@@ -1,0 +1,80 @@
+"""What the engine and its host exchange: the `Event`, the `Host` protocol and a `NullHost`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from swarmgen.runtime.chart import Call, Node, Record
+
+__all__ = ["Event", "Host", "NullHost"]
+
+
+@dataclass(slots=True)
+class Event:
+    """The paper's event format: name, data, a unique id, a timestamp and the sender's id."""
+
+    name: str
+    data: Record | None = None
+    id: int = 0
+    timestamp: float = 0.0
+    sender: str = ""
+    origin: tuple[str, int] | None = None  # (state id, activation) of a behaviour's outcome
+    # "external", "internal", "platform", or "raised": external, queued by this member's own
+    # `raise e(f = ...)` (the step bound goes on counting through it)
+    kind: str = "external"
+
+
+class Host(Protocol):
+    """What the engine asks of its host: behaviours, timers, the swarm bus and its own queue."""
+
+    def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
+        """Start the behaviour of a state just entered (outcomes carry `activation`)."""
+
+    def cancel_call(self, node: Node, activation: int) -> None:
+        """Cancel the behaviour of a state being exited."""
+
+    def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
+        """Deliver `event` to the engine after `delay_ms`, unless cancelled first."""
+
+    def cancel_timer(self, node: Node, event: str) -> None:
+        """Cancel a timer of a state being exited."""
+
+    def send_swarm(self, event: Event) -> None:
+        """Publish an event to the swarm."""
+
+    def deliver(self, event: Event) -> None:
+        """Queue an event to this member behind the external events already waiting."""
+
+
+class NullHost:
+    """A host that runs nothing: outcomes and timer events are submitted by hand (tests, replay)."""
+
+    def __init__(self) -> None:
+        self.calls: list[tuple[str, str, dict[str, Any]]] = []
+        self.sent: list[Event] = []
+        self.delivered: list[Event] = []  # events to itself (a `raise` with data)
+        self.timers: dict[str, int] = {}
+
+    def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
+        """Record the call (state id, behaviour, arguments)."""
+        self.calls.append((node.id, call.behaviour, args))
+
+    def cancel_call(self, node: Node, activation: int) -> None:
+        """Nothing runs, so nothing is cancelled."""
+
+    def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
+        """Record the pending timer."""
+        self.timers[event] = delay_ms
+
+    def cancel_timer(self, node: Node, event: str) -> None:
+        """Forget the pending timer."""
+        self.timers.pop(event, None)
+
+    def send_swarm(self, event: Event) -> None:
+        """Record the swarm event."""
+        self.sent.append(event)
+
+    def deliver(self, event: Event) -> None:
+        """Record the event to itself."""
+        self.delivered.append(event)
