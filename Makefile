@@ -21,17 +21,19 @@ ros: $(ROS_STAMP)
 
 $(ROS_STAMP): $(STAMP) pyproject.toml
 	$(BIN)/pip install --quiet -e '.[ros]'
+	$(BIN)/python -m swarmgen.ros.build --fix-wheels  # the wheels' CMake files, for cmake and colcon
 	touch $(ROS_STAMP)
 
 # Qt SCXML (system python3 + PySide2) is the independent engine the tests run our SCXML in;
-# cmake and a C++ compiler build the generated ROS 2 interface packages.
+# cmake and a C++ compiler build the generated ROS 2 interface packages (Ninja builds them faster).
 sysdeps:
 	@if ! $(SYSTEM_PYTHON) -c 'import PySide2.QtScxml' >/dev/null 2>&1 || ! command -v dot >/dev/null \
-		|| ! command -v cmake >/dev/null || ! command -v g++ >/dev/null || ! command -v make >/dev/null; then \
+		|| ! command -v cmake >/dev/null || ! command -v g++ >/dev/null || ! command -v make >/dev/null \
+		|| ! command -v ninja >/dev/null; then \
 		SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
 		$$SUDO apt-get update -qq && \
 		DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq \
-			python3-pyside2.qtscxml libqt6scxml6-bin graphviz cmake g++ make >/dev/null; \
+			python3-pyside2.qtscxml libqt6scxml6-bin graphviz cmake g++ make ninja-build >/dev/null; \
 	fi
 
 ## demo: compile every sample model into generated/<model>/ (SCXML per member type)

@@ -10,7 +10,7 @@ import gc
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
 from swarmgen import __version__, check, graph, outtree
@@ -25,6 +25,7 @@ from swarmgen.generated import header, markdown_cell
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
 from swarmgen.render import render, templates_from
+from swarmgen.ros.idl_index import InterfaceIndex, default_roots
 from swarmgen.scxml.emit import ScxmlDocument
 
 MANIFEST = outtree.MANIFEST
@@ -39,6 +40,8 @@ class Validation:
     model: Model | None
     diagnostics: list[Diagnostic]
     charts: tuple[Chart, ...] = ()  # the lowered model; empty unless it passed the checks
+    # the declared ROS types' definitions the check used (the rclpy backend binds in it)
+    interfaces: InterfaceIndex | None = field(default=None, compare=False, repr=False)
 
     @property
     def exit_code(self) -> dg.ExitCode:
@@ -67,14 +70,21 @@ def _few_collections() -> Iterator[None]:
         gc.set_threshold(*before)
 
 
-def validate(path: Path) -> Validation:
+def validate(path: Path, interfaces: Sequence[Path] = ()) -> Validation:
     """Load, build, check, lower and check the charts of one model; stops after the first
-    stage that reports errors (so compile and validate report the same diagnostics)."""
+    stage that reports errors (so compile and validate report the same diagnostics). Declared
+    ROS types resolve in the installed packages, `interfaces` (directories), `interfaces/`
+    beside the model, then swarmgen's bundled standard definitions (`ros.idl_index`)."""
     with _few_collections():
-        return _validate(path)
+        return _validate(path, interfaces)
 
 
-def _validate(path: Path) -> Validation:
+def interface_index(path: Path, interfaces: Sequence[Path] = ()) -> InterfaceIndex:
+    """The interface definitions the model at `path` is checked against (read lazily)."""
+    return InterfaceIndex(default_roots(interfaces, path))
+
+
+def _validate(path: Path, interfaces: Sequence[Path] = ()) -> Validation:
     raw, found = load(path)
     if raw is None or dg.has_errors(found):
         return Validation(None, dg.normalise(found))
@@ -82,29 +92,36 @@ def _validate(path: Path) -> Validation:
     found += built
     if dg.has_errors(found):
         return Validation(model, dg.normalise(found))
-    found += check.run(model)
+    index = interface_index(path, interfaces)
+    found += check.run(model, index)
     if not check.may_lower(found):
-        return Validation(model, dg.normalise(found))
+        return Validation(model, dg.normalise(found), interfaces=index)
     charts = lower(model)
     found += chart_checks.run(model, charts)
-    return Validation(model, dg.normalise(found), charts)
+    return Validation(model, dg.normalise(found), charts, index)
 
 
 def compile_model(
-    path: Path, backends: Sequence[str] | None = None, templates: Path | None = None
+    path: Path,
+    backends: Sequence[str] | None = None,
+    templates: Path | None = None,
+    interfaces: Sequence[Path] = (),
 ) -> Compilation:
-    """Validate, then render every output of the registry (all, or SCXML and those named),
-    with the templates of `templates` before the shipped ones (`swarmgen.render`)."""
+    """Validate (declared ROS types against `interfaces` too, as `validate`), then render every
+    output of the registry (all, or SCXML and those named), with the templates of `templates`
+    before the shipped ones (`swarmgen.render`)."""
     with _few_collections(), templates_from(templates):
-        return _compile(path, backends)
+        return _compile(path, backends, interfaces)
 
 
-def _compile(path: Path, backends: Sequence[str] | None) -> Compilation:
-    validation = _validate(path)
+def _compile(
+    path: Path, backends: Sequence[str] | None, interfaces: Sequence[Path] = ()
+) -> Compilation:
+    validation = _validate(path, interfaces)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         return Compilation(validation, {})
     files: Files = {}
-    outputs = registry()
+    outputs = registry(validation.interfaces)
     for name in selection(backends):
         for relative, text in outputs[name].render(validation.model, validation.charts).items():
             files[PurePosixPath(name) / relative] = text

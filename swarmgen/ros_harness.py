@@ -5,6 +5,13 @@ Every ROS process runs with `ROS_AUTOMATIC_DISCOVERY_RANGE` set (LOCALHOST: no m
 real network; OFF: in-process only, used by replay, which then cannot meet any other ROS
 process), its own `ROS_LOG_DIR`, a `HOME` (rclpy's logging needs one) and under
 `timeout -k 5 <s>`, because a wedged rclpy process ignores SIGTERM.
+
+Interface packages: the swarm's own (`<swarm>_interfaces`) is installed into this venv; the
+packages built from the user's definitions (`cpswarm_msgs`, beside it in `rclpy/`) go into a
+prefix per swarm, `<venv>/var/swarmgen/<swarm>/`, never into the venv: an installed copy would
+change what the next compile resolves, and two models may define one package differently (the
+samples' `cpswarm_msgs`). `ros_env` puts the prefixes built in this process on the subprocess's
+`PYTHONPATH`, `LD_LIBRARY_PATH` and `AMENT_PREFIX_PATH` (the latest first).
 """
 
 from __future__ import annotations
@@ -15,11 +22,17 @@ import os
 import subprocess
 import sys
 import tempfile
+import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from swarmgen.backends.rclpy_backend import interfaces_package, member_modules, nodes_package
+from swarmgen.backends.rclpy_backend import (
+    interfaces_package,
+    member_modules,
+    nodes_package,
+    swarm_name,
+)
 from swarmgen.chart.model import Chart
 from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import Model
@@ -34,6 +47,30 @@ class RosRunError(SwarmgenError, RuntimeError):
     """A ROS subprocess failed or timed out."""
 
 
+_BUILT: list[Path] = []  # prefixes of user interface packages built by this process
+
+
+def user_prefix(model: Model) -> Path:
+    """Where the swarm's user interface packages are installed (module docstring)."""
+    return Path(sys.prefix) / "var" / "swarmgen" / swarm_name(model)
+
+
+def prefix_env(prefixes: Sequence[Path], env: dict[str, str]) -> None:
+    """Put interface prefixes first on the Python, library and ament paths of `env`."""
+    version = f"python{sys.version_info.major}.{sys.version_info.minor}"
+    paths = {
+        "PYTHONPATH": [p / "lib" / version / "site-packages" for p in prefixes],
+        "LD_LIBRARY_PATH": [p / "lib" for p in prefixes],
+        "AMENT_PREFIX_PATH": list(prefixes),
+    }
+    for variable, entries in paths.items():
+        parts = [str(e) for e in entries]
+        if env.get(variable):
+            parts.append(env[variable])
+        if parts:
+            env[variable] = os.pathsep.join(parts)
+
+
 def ros_env(
     log_dir: Path,
     *,
@@ -41,9 +78,12 @@ def ros_env(
     discovery: str = "LOCALHOST",
     python_path: Sequence[Path] = (),
     base: Mapping[str, str] | None = None,
+    prefixes: Sequence[Path] | None = None,
 ) -> dict[str, str]:
-    """The environment of a ROS 2 subprocess (see the module docstring)."""
+    """The environment of a ROS 2 subprocess (see the module docstring); `prefixes`: the user
+    interface prefixes to use (None: those `build_interfaces` built in this process)."""
     env = dict(os.environ if base is None else base)
+    prefix_env(list(reversed(_BUILT)) if prefixes is None else prefixes, env)
     env.pop("ROS_LOCALHOST_ONLY", None)  # ignored by Kilted; do not pretend it isolates
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery
     if domain_id is not None:
@@ -66,12 +106,38 @@ def check_rclpy() -> None:
 
 
 def build_interfaces(rclpy_dir: Path, model: Model) -> Path:
-    """Build and install the model's interface package into this venv (skipped when current)."""
+    """Build the model's interface package into this venv and its user interface packages into
+    `user_prefix(model)` (each skipped when current); the user prefix."""
     check_rclpy()
+    prefix = user_prefix(model)
     try:
-        return build_and_install(rclpy_dir / interfaces_package(model))
+        build_and_install(rclpy_dir / interfaces_package(model))
+        for package in user_package_dirs(rclpy_dir, model):
+            build_and_install(package, prefix)
     except InterfaceBuildError as err:
         raise RosUnavailable(f"cannot build the ROS 2 interfaces: {err}") from None
+    if prefix in _BUILT:
+        _BUILT.remove(prefix)
+    _BUILT.append(prefix)
+    return prefix
+
+
+def user_package_dirs(rclpy_dir: Path, model: Model) -> list[Path]:
+    """The user interface packages in `rclpy_dir`, dependencies first."""
+    own = {interfaces_package(model), nodes_package(model)}
+    depends: dict[str, set[str]] = {}
+    for manifest in sorted(rclpy_dir.glob("*/package.xml")):
+        name = manifest.parent.name
+        if name in own:
+            continue
+        root = ET.parse(manifest).getroot()
+        depends[name] = {(d.text or "").strip() for d in root.iter("depend")}
+    ordered: list[str] = []
+    while depends:  # a package after the user packages it depends on
+        ready = [n for n in sorted(depends) if not depends[n] & (set(depends) - {n})]
+        ordered.append(ready[0] if ready else min(depends))
+        del depends[ordered[-1]]
+    return [rclpy_dir / name for name in ordered]
 
 
 def replay_rclpy(
@@ -84,7 +150,7 @@ def replay_rclpy(
 ) -> list[list[dict[str, Any]]]:
     """Replay scenarios on one member node (real rclpy, one subprocess for all of them).
     `stats` receives the harness's counters (see `swarmgen.ros.runtime.replay`)."""
-    build_interfaces(rclpy_dir, model)
+    prefix = build_interfaces(rclpy_dir, model)
     package = nodes_package(model)
     module = member_modules(charts)[chart_name]
     steps = sum(len(s) for s in scenarios)
@@ -92,7 +158,12 @@ def replay_rclpy(
     with tempfile.TemporaryDirectory(prefix="swarmgen-rclpy-replay-") as tmp:
         path = Path(tmp) / "scenarios.json"
         path.write_text(json.dumps([list(s) for s in scenarios]), encoding="utf-8")
-        env = ros_env(Path(tmp) / "roslog", discovery="OFF", python_path=[rclpy_dir / package])
+        env = ros_env(
+            Path(tmp) / "roslog",
+            discovery="OFF",
+            python_path=[rclpy_dir / package],
+            prefixes=[prefix],
+        )
         command = [
             "timeout", "-k", "5", str(limit), sys.executable,
             "-m", f"{package}._ros.replay", f"{package}.{module}", str(path),

@@ -120,6 +120,11 @@ class ModelKit:
         ] = {}
         self.swarms: dict[str, list[tuple[str, str, int]]] = {}  # swarm -> (part, type, count)
         self.datatypes = {"Pose": {"x": "Real", "y": "Real"}}
+        self.enumerations: dict[str, list[str]] = {}  # name -> literals
+
+    def enumeration(self, name: str, *literals: str) -> None:
+        """A UML Enumeration; `Type[*]` anywhere a type is named makes a sequence of Type."""
+        self.enumerations[name] = list(literals)
 
     def hardware(
         self,
@@ -189,6 +194,15 @@ class ModelKit:
             )
             body += [f"      {_attribute(ids, f, t)}" for f, t in fields.items()]
             body.append("    </packagedElement>")
+        for enum, literals in self.enumerations.items():
+            body.append(
+                f'    <packagedElement xmi:type="uml:Enumeration" xmi:id="{ids["dt:" + enum]}" name="{enum}">'
+            )
+            body += [
+                f'      <ownedLiteral xmi:id="{ids.new()}" name={quoteattr(lit)}/>'
+                for lit in literals
+            ]
+            body.append("    </packagedElement>")
         for hw, (kind, generals, params) in self.hardware_classes.items():
             body.append(
                 f'    <packagedElement xmi:type="uml:Class" xmi:id="{ids["class:" + hw]}" name={quoteattr(hw)}>'
@@ -255,7 +269,7 @@ class ModelKit:
                     lines.append(
                         f'          <ownedParameter xmi:id="{ids.new()}" name={quoteattr(param)}{direction}>'
                     )
-                    lines.append(f"            {_type(ids, type_)}")
+                    lines.append(f"            {_type(ids, type_)}{_upper(ids, type_)}")
                     lines.append("          </ownedParameter>")
             lines.append("        </ownedOperation>")
             tags = "".join(
@@ -311,7 +325,14 @@ class _Ids:
         return self._named[key]
 
 
+def _upper(ids: _Ids, type_: str) -> str:
+    if not type_.endswith("[*]"):
+        return ""
+    return f'<upperValue xmi:type="uml:LiteralUnlimitedNatural" xmi:id="{ids.new()}" value="*"/>'
+
+
 def _type(ids: _Ids, type_: str) -> str:
+    type_ = type_.removesuffix("[*]")
     if type_ in PRIMITIVES:
         return f'<type xmi:type="uml:PrimitiveType" href="pathmap://UML_LIBRARIES/UMLPrimitiveTypes.library.uml#{type_}"/>'
     return f'<type xmi:type="uml:DataType" href="#{ids["dt:" + type_]}"/>'
@@ -319,6 +340,7 @@ def _type(ids: _Ids, type_: str) -> str:
 
 def _attribute(ids: _Ids, name: str, type_: str, default: object = None) -> str:
     text = f'<ownedAttribute xmi:id="{ids.new()}" name={quoteattr(name)}>{_type(ids, type_)}'
+    text += _upper(ids, type_)
     if default is not None:
         kind = {bool: "LiteralBoolean", int: "LiteralInteger", float: "LiteralReal"}.get(
             type(default), "LiteralString"

@@ -352,7 +352,10 @@ def _neighbours(value: Any, type_name: str | None) -> set[Any]:
     if isinstance(value, bool):
         return {True, False}
     if isinstance(value, str):
-        return {value, value + "_"} if type_name in {None, "String"} else set()
+        if type_name in {None, "String"}:
+            return {value, value + "_"}
+        # an enumeration literal (`mode == Mode.track`): the literal itself, nothing near it
+        return {value} if type_name not in {"Integer", "Real", "Boolean"} else set()
     if not isinstance(value, int | float):
         return set()
     if type_name == "Integer" or (type_name is None and isinstance(value, int)):

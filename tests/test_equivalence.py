@@ -30,6 +30,8 @@ from tests.skips import need_rclpy
 WALKS = 16
 WALK_LENGTH = 40
 FIREWATCH = ROOT / "tests" / "fixtures" / "models" / "firewatch.xmi"
+# enumerations driving guards, a sequence through behaviours and an event, nested data types
+DISPATCH = ROOT / "tests" / "fixtures" / "models" / "dispatch.xmi"
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 _ALL_MODELS = [
     *SAMPLE_MODELS,
@@ -38,6 +40,7 @@ _ALL_MODELS = [
     XMI_SAMPLES / "papyrus_spring-sm_simple-forkjoin.uml",
     XMI_SAMPLES / "papyrus_spring-sm_simple-connectionpointref.uml",
     FIREWATCH,
+    DISPATCH,
 ]
 # The reference files live in ../shared, which a user's clone does not have.
 MODELS = [m for m in _ALL_MODELS if m.exists()]
@@ -53,6 +56,10 @@ def test_reference_models_are_here() -> None:
 PYTHON_BACKENDS = [b for b in backend_names() if b in replay.BACKENDS and b != "scxml"]
 ALL_BACKENDS = ["asyncio", "smach", "scxml", "rclpy"]
 RCLPY_CASES = [(FIREWATCH, "Scout"), (SAR, "UAV")]
+# Models whose types the ROS mapping does not carry yet: sequences become `float64[]` only once
+# the rclpy backend maps `Property.many` (docs/ros2.md, "Structured data"); until then an output
+# a behaviour does not give arrives as 0, not []. Remove the model from here with that change.
+RCLPY_PENDING = {DISPATCH}
 RCLPY_SAMPLE = 6  # scenarios per case on rclpy (its replay is slow)
 
 Trace = list[dict[str, Any]]
@@ -101,6 +108,8 @@ def test_backends_agree_with_qt_scxml(model: Path, member: str, qt_available: No
         f"the walks should visit several configurations: {configurations}"
     )
     for backend in sorted(PYTHON_BACKENDS, key=lambda b: b == "rclpy"):
+        if backend == "rclpy" and model in RCLPY_PENDING:
+            continue
         if backend == "rclpy":
             need_rclpy()  # last: without the `ros` extra, the others were still compared
         traces = replay.replay_many(model, member, scenarios, backend)
@@ -366,4 +375,31 @@ def _both_traces(backend: str, number: int, steps: object, ours: Trace, theirs: 
     return (
         f"{_first_difference(backend, number, steps, ours, theirs)}\n"
         f"  {backend} trace:\n{_show(ours)}\n  qt trace:\n{_show(theirs)}"
+    )
+
+
+# Dispatch's Plan gives only `route` and `zone`, then `mode` too: an enumeration-typed output
+# the behaviour does not give is written as the enumeration's first literal, not "" (the value
+# rule, docs/semantics.md); Planning's `mode != Mode.track` then holds and sets `home`.
+DISPATCH_OMITTED = [
+    {"event": "missionStart"},
+    {"complete": "Plan", "outcome": "succeeded", "outputs": {"route": [1.0], "zone": {}}},
+    {"event": "missionStart"},
+    {"complete": "Plan", "outcome": "aborted", "outputs": {}},
+]
+
+
+@pytest.mark.parametrize("backend", [b for b in ALL_BACKENDS if b != "rclpy"])  # RCLPY_PENDING
+def test_dispatch_omitted_enum_output_is_its_first_literal(
+    backend: str, request: pytest.FixtureRequest
+) -> None:
+    if backend == "scxml":
+        request.getfixturevalue("qt_available")
+    (trace,) = replay.replay_many(DISPATCH, "Rover", [DISPATCH_OMITTED], backend)
+    planned, aborted = trace[2], trace[4]
+    assert planned["data"]["mode"] == "home" and planned["data"]["route"] == [1.0], (
+        f"{backend}: the omitted mode is `search`, so `mode != Mode.track` sets home:\n{_show(trace)}"
+    )
+    assert aborted["data"]["mode"] == "search" and aborted["data"]["route"] == [], (
+        f"{backend}: outputs not given are the zeros `search` and []:\n{_show(trace)}"
     )

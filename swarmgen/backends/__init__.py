@@ -17,6 +17,7 @@ from swarmgen.chart.model import Chart
 from swarmgen.ir.nodes import Model
 
 if TYPE_CHECKING:
+    from swarmgen.ros.idl_index import InterfaceIndex
     from swarmgen.scxml.emit import ScxmlDocument
 
 Files = dict[PurePosixPath, str]
@@ -75,16 +76,17 @@ def _smach() -> Backend:
     return SmachBackend()
 
 
-def _rclpy() -> Backend:
+def _rclpy(interfaces: InterfaceIndex | None) -> Backend:
     from swarmgen.backends.rclpy_backend import RclpyBackend
 
-    return RclpyBackend()
+    return RclpyBackend(interfaces)
 
 
 @dataclass(frozen=True)
 class _Entry:
-    make: Callable[[], Backend]  # imported lazily: start-up (and `--help`) stays fast
+    make: Callable[..., Backend]  # imported lazily: start-up (and `--help`) stays fast
     runnable: bool  # `swarmgen replay` can run what it writes
+    interfaces: bool = False  # made with the interface index (declared ROS types)
 
 
 # The single list of outputs, in output order.
@@ -92,14 +94,19 @@ _TABLE: dict[str, _Entry] = {
     SCXML: _Entry(ScxmlOutput, runnable=True),
     "asyncio": _Entry(_asyncio, runnable=True),
     "smach": _Entry(_smach, runnable=True),
-    "rclpy": _Entry(_rclpy, runnable=True),
+    "rclpy": _Entry(_rclpy, runnable=True, interfaces=True),
     "diagrams": _Entry(DiagramsOutput, runnable=False),
 }
 
 
-def registry() -> dict[str, Backend]:
-    """A fresh instance of every output by name, in output order."""
-    return {name: entry.make() for name, entry in _TABLE.items()}
+def registry(interfaces: InterfaceIndex | None = None) -> dict[str, Backend]:
+    """A fresh instance of every output by name, in output order. The outputs that use
+    declared ROS types (rclpy) get `interfaces`, the index the check resolved them in; the
+    protocol stays `render(model, charts)` for every output."""
+    return {
+        name: entry.make(interfaces) if entry.interfaces else entry.make()
+        for name, entry in _TABLE.items()
+    }
 
 
 def names(*leaving_out: str) -> list[str]:

@@ -24,6 +24,7 @@ RUNTIME_MODULES = (
     "args",
     "cli",
     "replay",
+    "plugins",
 )
 
 # `replay`, `sim` and the tests name these here, where the asyncio package is made.

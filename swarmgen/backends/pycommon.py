@@ -11,17 +11,18 @@ from typing import Any
 from swarmgen import __version__
 from swarmgen.backends import Files
 from swarmgen.backends.pyrender import event_fields_literal, format_python
+from swarmgen.backends.pytypes import MODULE, render_types
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart.model import Chart
 from swarmgen.generated import header
 from swarmgen.ir.nodes import Model
+from swarmgen.ir.primitives import zero_of
 from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import IdAllocator, doc_text, one_line, ros_name
 from swarmgen.render import render
 
-_DEFAULTS = {"Real": 0.0, "Integer": 0, "Boolean": False, "String": ""}
 # Module names of the asyncio and smach packages that member modules must not take.
-PACKAGE_MODULES = ("behaviours", "cli")
+PACKAGE_MODULES = ("behaviours", "cli", MODULE)
 
 
 def package_name(model: Model) -> str:
@@ -68,7 +69,7 @@ def script_specs(charts: tuple[Chart, ...]) -> dict[str, dict[str, Any]]:
             if not ended:
                 scripts.setdefault(info.name, {"forever": True})
                 continue
-            outputs = {name: _DEFAULTS.get(type_ or "") for name, type_ in info.outputs}
+            outputs = {name: zero_of(type_) for name, type_ in info.outputs}
             scripts[info.name] = {"duration": 1.0, "outcome": "succeeded", "outputs": outputs}
     return dict(sorted(scripts.items()))
 
@@ -144,7 +145,8 @@ def package_files(
     render_member: Callable[[Chart, dict[str, str]], str],
 ) -> Files:
     """The package of the asyncio and smach backends: member modules, `__init__.py` (from the
-    backend's templates), `__main__.py`, the simulated behaviours and the vendored runtime."""
+    backend's templates), `__main__.py`, the simulated behaviours, the typed
+    behaviours (`behaviour_types.py`) and the vendored runtime."""
     if not charts:
         return {}  # no state machine, nothing to run
     package = PurePosixPath(package_name(model))
@@ -175,5 +177,7 @@ def package_files(
     )
     files[package / "__main__.py"] = format_python(main)
     files[package / "behaviours.py"] = format_python(behaviours)
+    typed = render_types(model, charts, str(package), common)
+    files[package / f"{MODULE}.py"] = format_python(typed)
     files.update(runtime_files(package / "_runtime", runtime_modules))
     return files

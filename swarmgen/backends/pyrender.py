@@ -17,6 +17,7 @@ from black.mode import TargetVersion
 from swarmgen.chart import model as c
 from swarmgen.ir import expr
 from swarmgen.names import identifier
+from swarmgen.runtime.chart import zero_like
 
 BLACK_MODE = black.Mode(line_length=100, target_versions={TargetVersion.PY311})
 
@@ -73,6 +74,18 @@ def event_fields_literal(chart: c.Chart) -> str:
     return "{" + ", ".join(items) + "}"
 
 
+def zeros_literal(chart: c.Chart) -> str | None:
+    """The data whose zero the runtime cannot tell from their initial value (`zero_like`: an
+    enumeration's is its first literal, not ""), as a dict literal; None when there are none,
+    so a model without them renders as before."""
+    items = [
+        f"{d.id!r}: {py_literal(d.zero)}"
+        for d in chart.data
+        if py_literal(d.zero) != py_literal(zero_like(d.initial))
+    ]
+    return "{" + ", ".join(items) + "}" if items else None
+
+
 class ChartRenderer:
     """Turns one chart into `ChartCode`."""
 
@@ -89,6 +102,9 @@ class ChartRenderer:
         """The chart's helper functions and `ChartBuilder` statements, in document order."""
         items = ", ".join(f"{d.id!r}: {py_literal(d.initial)}" for d in self.chart.data)
         self.code.data_literal = "{" + items + "}"
+        zeros = zeros_literal(self.chart)
+        if zeros is not None:
+            self.code.statements.append(f"b.zeros({zeros})")
         for node in self.chart.children:
             self._node(node, None)
         self.code.statements.append(f"b.initial(None, {tuple(self.chart.initial)!r})")

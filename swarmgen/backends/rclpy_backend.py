@@ -3,11 +3,11 @@
 Output under `rclpy/`:
 
 - `<swarm>_interfaces/`: an ament_cmake/rosidl package (`swarmgen.ros.interfaces`): the `Event`
-  and `ActiveStates` messages and one action per library behaviour, named after the behaviour
-  (goal = inputs, result = outputs + outcome, feedback = status). Every behaviour gets an action
-  of its own, whatever `rosKind`/`rosType` the model declares: the declared types live in
-  packages that do not exist here (`cpswarm_msgs/action/Coverage`), so the generated nodes could
-  not import them; the declared kind, name and type are kept as read-only node parameters.
+  and `ActiveStates` messages and one action per library behaviour that has no resolvable
+  declared type, named after the behaviour (goal = inputs, result = outputs + outcome, feedback
+  = status). A behaviour whose `rosType` binds (`rclpy_declared`) runs on that type instead
+  (`BehaviourSpec(binding=Binding(...))`), and the types found only in the user's interface
+  directories become interface packages of the workspace (`<pkg>/`, definitions as they are).
 - `<swarm>_nodes/`: an ament_python package: a node module per member type (its statechart,
   behaviours, parameters), scripted action servers that simulate the behaviours, the swarm
   launcher (`launch_swarm`, all members in one process), `launch/<swarm>.launch.py`, and
@@ -30,14 +30,22 @@ from xml.sax.saxutils import escape
 
 from swarmgen.backends import Files, pycommon
 from swarmgen.backends.pycommon import common_view, member_view, script_specs
-from swarmgen.backends.pyrender import ChartRenderer, format_python, py_literal
+from swarmgen.backends.pyrender import ChartRenderer, format_python
+from swarmgen.backends.rclpy_declared import (
+    Declared,
+    declared_bindings,
+    exec_depends,
+    user_packages,
+)
+from swarmgen.backends.rclpy_parameters import field_type, member_parameters
 from swarmgen.backends.vendor import ros_runtime_files, runtime_files
 from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.generated import header, markdown_cell
-from swarmgen.ir.nodes import Model, Value
+from swarmgen.ir.nodes import Model
 from swarmgen.ir.query import composition as swarm_composition
-from swarmgen.names import IdAllocator, doc_text, identifier, one_line, ros_name
+from swarmgen.names import doc_text, identifier, one_line, ros_name
 from swarmgen.render import render
+from swarmgen.ros.idl_index import InterfaceIndex
 from swarmgen.ros.interfaces import (
     ACTIVE_STATES_MSG,
     EVENT_MSG,
@@ -45,20 +53,25 @@ from swarmgen.ros.interfaces import (
     check_field_name,
     check_package_name,
     check_type_name,
-    interface_type,
     render_interface_package,
 )
+
+__all__ = ["RclpyBackend", "field_type", "interfaces_package", "member_modules", "nodes_package"]
 
 RUNTIME_MODULES = ("chart", "host", "configuration", "engine", "member", "replay", "args")
 ROS_RUNTIME_MODULES = (
     "spec",
     "messages",
     "scheduler",
+    "convert",
+    "bindings",
+    "declared",
     "process",
     "goals",
     "node",
     "expressions",
     "scripts",
+    "served",
     "servers",
     "simulated",
     "station",
@@ -94,15 +107,6 @@ def nodes_package(model: Model) -> str:
 def member_modules(charts: Iterable[Chart]) -> dict[str, str]:
     """chart name -> module (and node, executable) name: lower snake case, unique."""
     return pycommon.member_modules(charts, _RESERVED_MODULES, "_member")
-
-
-def field_type(type_name: str | None) -> str:
-    """How a value of a model type travels in a ROS field: float64, int64, bool, string, or
-    json (a string field carrying JSON: data types such as Pose, and untyped values)."""
-    ros = interface_type(type_name)
-    if ros == "string" and (type_name or "").strip().lower() != "string":
-        return "json"
-    return ros
 
 
 def is_relative_ros_name(name: str) -> bool:
@@ -150,6 +154,14 @@ class BehaviourView:
     inputs: tuple[FieldView, ...]
     outputs: tuple[FieldView, ...]
     note: str  # why the action name differs from the declared rosName ("" if it does not)
+    declared: Declared | None = None  # runs on its declared type (no private action)
+
+    @property
+    def runs_as(self) -> str:
+        """How the behaviour runs, for parameter descriptions and the README."""
+        if self.declared is not None:
+            return f"run as {self.declared.binding.kind} {self.declared.binding.type} at {self.ros_name}"
+        return f"run as action {self.action} at {self.ros_name}"
 
     @property
     def action_text(self) -> str:
@@ -171,16 +183,24 @@ class BehaviourView:
             inner = "".join(f"Field({f.name!r}, {f.field!r}, {f.type!r}), " for f in items)
             return f"({inner})"
 
+        if self.declared is not None:  # no private action: its fields are the binding's
+            action, io, binding = "", "", f", binding={self.declared.literal(self.ros_name)}"
+        else:
+            action, binding = self.action, ""
+            io = f"inputs={fields(self.inputs)}, outputs={fields(self.outputs)}, "
         return (
-            f"BehaviourSpec(name={self.info.name!r}, action={self.action!r}, "
-            f"ros_name={self.ros_name!r}, kind={self.info.kind!r}, "
-            f"inputs={fields(self.inputs)}, outputs={fields(self.outputs)}, "
-            f"outcomes={tuple(self.info.outcomes)!r}, declared={declared!r})"
+            f"BehaviourSpec(name={self.info.name!r}, action={action!r}, "
+            f"ros_name={self.ros_name!r}, kind={self.info.kind!r}, {io}"
+            f"outcomes={tuple(self.info.outcomes)!r}, declared={declared!r}{binding})"
         )
 
 
-def behaviour_views(charts: tuple[Chart, ...]) -> dict[str, BehaviourView]:
-    """Every behaviour the charts run, by model name, with its action type, name and fields."""
+def behaviour_views(
+    charts: tuple[Chart, ...], bound: dict[str, Declared] | None = None
+) -> dict[str, BehaviourView]:
+    """Every behaviour the charts run, by model name, with its action type, name and fields,
+    and its binding when it runs on its declared type (`bound`, by model name)."""
+    bound = bound or {}
     infos: dict[str, BehaviourInfo] = {}
     for chart in charts:
         for info in chart.behaviours:
@@ -220,98 +240,37 @@ def behaviour_views(charts: tuple[Chart, ...]) -> dict[str, BehaviourView]:
             FieldView(ident, _field_name(ident, out_taken), field_type(type_), type_)
             for ident, type_ in info.outputs
         )
-        views[name] = BehaviourView(info, candidate, action_name, inputs, outputs, note)
+        views[name] = BehaviourView(
+            info, candidate, action_name, inputs, outputs, note, bound.get(name)
+        )
     return views
 
 
-def _parameter(name: str, type_: str, default: Value, **extra: Any) -> str:
-    options = "".join(f", {k}={v!r}" for k, v in extra.items() if v not in (None, False, ""))
-    return f"Parameter({name!r}, {type_!r}, {py_literal(default)}{options})"
-
-
-def member_parameters(model: Model, chart: Chart, views: dict[str, BehaviourView]) -> list[str]:
-    """`Parameter(...)` literals: member data defaults, hardware parameters (read only) and the
-    declared ROS binding of each behaviour the member runs (read only metadata)."""
-    taken = IdAllocator()
-    found = [
-        _parameter(
-            taken.claim(f"data.{ros_name(item.id)}"),
-            field_type(item.type),
-            item.initial,
-            data=item.id,
-            description=f"member data {item.name} ({item.type or 'untyped'})",
-        )
-        for item in chart.data
-    ]
-    found += _hardware_parameters(model, chart, taken)
-    for info in chart.behaviours:
-        view = views[info.name]
-        prefix = f"behaviours.{ros_name(info.name)}"
-        for key in ("ros_kind", "ros_name", "ros_type"):
-            value = getattr(info, key)
-            if value:
-                found.append(
-                    _parameter(
-                        taken.claim(f"{prefix}.{key}"),
-                        "string",
-                        value,
-                        read_only=True,
-                        description=f"declared by the model; run as action {view.action} at {view.ros_name}",
-                    )
-                )
-    return found
-
-
-def _hardware_parameters(model: Model, chart: Chart, taken: IdAllocator) -> list[str]:
-    """The member's hardware: part counts, component parameters and communication settings."""
-    member = next((m for m in model.member_types if m.name == chart.member), None)
-    components = {h.id: h for h in model.hardware}
-    found = []
-    for part in member.hardware if member is not None else ():
-        prefix = f"hardware.{ros_name(part.name)}"
-        found.append(
-            _parameter(
-                taken.claim(f"{prefix}.count"),
-                "int64",
-                part.count,
-                read_only=True,
-                description=f"{part.name}: {part.count} x {part.type_name}",
-            )
-        )
-        component = components.get(part.type_id)
-        if component is None:
-            continue
-        for prop in component.parameters:
-            found.append(
-                _parameter(
-                    taken.claim(f"{prefix}.{ros_name(prop.ident)}"),
-                    field_type(prop.type) if prop.type else "json",
-                    prop.default,
-                    read_only=True,
-                    description=f"{component.name}.{prop.name} ({prop.type or 'untyped'})",
-                )
-            )
-        for key in ("communication_type", "communication_params"):
-            value = getattr(component, key)
-            if value is not None:
-                found.append(
-                    _parameter(taken.claim(f"{prefix}.{key}"), "string", value, read_only=True)
-                )
-    return found
-
-
 class RclpyBackend:
-    """The ROS 2 output: an interface package and a node package with launcher."""
+    """The ROS 2 output: interface packages and a node package with launcher. `interfaces` is
+    the index the check resolved the declared types in (None: every behaviour private)."""
 
     name = "rclpy"
 
+    def __init__(self, interfaces: InterfaceIndex | None = None) -> None:
+        self.interfaces = interfaces
+
     def render(self, model: Model, charts: tuple[Chart, ...]) -> Files:
-        """The interface package, the node package and README.md (see the module docstring)."""
+        """The interface packages, the node package and README.md (the module docstring)."""
         if not charts:
             return {}  # no state machine, nothing to run
-        views = behaviour_views(charts)
+        names = sorted({info.name for chart in charts for info in chart.behaviours})
+        own = (interfaces_package(model), nodes_package(model))
+        declared = declared_bindings(model, names, self.interfaces, own)
+        views = behaviour_views(charts, declared)
         view = package_view(model, charts)
+        listed = ("action_msgs", "builtin_interfaces", "rcl_interfaces")  # package.xml.j2's
+        view["depends"] = exec_depends(declared.values(), (*own, *listed))
         files = interface_files(model, views)
+        packages = user_packages(declared.values(), self.interfaces) if self.interfaces else {}
+        view["user_packages"] = sorted(packages)
+        for package, rendered in packages.items():
+            files.update({PurePosixPath(package) / p: t for p, t in rendered.items()})
         files.update(node_modules(model, charts, views, view))
         files.update(package_files(model, charts, view))
         files[PurePosixPath("README.md")] = readme(model, views, view)
@@ -353,7 +312,7 @@ def interface_files(model: Model, views: dict[str, BehaviourView]) -> Files:
     rendered = render_interface_package(
         interfaces,
         {"Event": EVENT_MSG, "ActiveStates": ACTIVE_STATES_MSG},
-        {v.action: v.action_text for v in views.values()},
+        {v.action: v.action_text for v in views.values() if v.declared is None},
         description,
     )
     return {PurePosixPath(interfaces) / path: text for path, text in rendered.items()}
@@ -429,10 +388,12 @@ def readme(model: Model, views: dict[str, BehaviourView], view: dict[str, Any]) 
     rows = []
     for v in views.values():
         declared = " ".join(x for x in (v.info.ros_kind, v.info.ros_name, v.info.ros_type) if x)
+        bound = v.declared
         rows.append(
             {
                 "name": markdown_cell(v.info.name),
-                "action": v.action,
+                "kind": bound.binding.kind if bound else "action",
+                "type": bound.binding.type if bound else f"{view['interfaces']}/action/{v.action}",
                 "ros_name": v.ros_name,
                 "declared": markdown_cell(declared or "-"),
             }
@@ -467,13 +428,23 @@ def render_member(
     """A member node module: the chart's code, its behaviours' actions and its parameters."""
     code = ChartRenderer(chart).render()
     behaviours = [views[b.name] for b in chart.behaviours]
+    reserved = [p for v in behaviours if v.declared and (p := v.declared.timeout_parameter)]
+    runs_as = {v.info.name: v.runs_as for v in behaviours}
+    imports = ["BehaviourSpec", "MemberSpec", "Parameter", "run_member"]
+    if any(v.declared for v in behaviours):
+        imports.append("Binding")
+    if any(v.declared is None for v in behaviours):
+        imports.append("Field")
     text = render(
         "rclpy/member.py.j2",
         **member_view(chart, common, code, " as a ROS 2 node", chart.member or chart.name),
         node_name=repr(module),
         interfaces=repr(interfaces),
         behaviours="{" + ", ".join(f"{v.info.name!r}: {v.spec()}" for v in behaviours) + "}",
-        parameters="(" + "".join(f"{p}, " for p in member_parameters(model, chart, views)) + ")",
+        node_imports=", ".join(sorted(imports)),
+        parameters="("
+        + "".join(f"{p}, " for p in member_parameters(model, chart, runs_as, reserved))
+        + ")",
         notes=[f"{one_line(v.info.name)}: {one_line(v.note)}" for v in behaviours if v.note],
     )
     return format_python(text)

@@ -10,7 +10,13 @@ from dataclasses import dataclass, field
 
 from swarmgen.backends.asyncio_backend import RUNTIME_MODULES
 from swarmgen.backends.pycommon import PackageBackend, member_view
-from swarmgen.backends.pyrender import ChartRenderer, Function, format_python, py_literal
+from swarmgen.backends.pyrender import (
+    ChartRenderer,
+    Function,
+    format_python,
+    py_literal,
+    zeros_literal,
+)
 from swarmgen.chart import model as c
 from swarmgen.chart.model import Chart
 from swarmgen.ir import expr
@@ -75,6 +81,9 @@ class SmachRenderer(ChartRenderer):
                 top.lines.append(f"sm.userdata.{item.id} = {value}")
             else:
                 top.lines.append(f"sm.userdata[{item.id!r}] = {value}")
+        zeros = zeros_literal(self.chart)
+        if zeros is not None:
+            top.lines.append(f"sm.zeros = {zeros}")
         top.lines.append("with sm:")
         initial = [self._target(None, t) for t in self.chart.initial]
         top.lines.append(f"{INDENT}sm.set_initial_state({initial!r})")

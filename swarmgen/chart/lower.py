@@ -94,7 +94,7 @@ class _Lowering(Transitions):
             role=member.role if member else None,
             source=self.index.model.source.replace("\\", "/").rsplit("/", 1)[-1],
             data=tuple(
-                c.DataItem(p.ident, p.name, p.type, p.default, self._initial(p))
+                c.DataItem(p.ident, p.name, p.type, p.default, *self._initial_and_blank(p))
                 for p in sorted(self.data.values(), key=lambda p: p.name)
             ),
             initial=initial,
@@ -345,4 +345,5 @@ def _behaviour_info(behaviour: Behaviour) -> c.BehaviourInfo:
         ros_kind=ros.kind if ros else None,
         ros_name=ros.name if ros else None,
         ros_type=ros.type if ros else None,
+        sequences=frozenset(p.ident for p in (*behaviour.inputs, *behaviour.outputs) if p.many),
     )

@@ -131,7 +131,13 @@ class Context:
         return self.vertex_ids[(instance, vertex_id)]
 
     def _initial(self, prop: Property) -> object:
-        return values.initial(prop, self.index.datatypes)
+        return values.initial(prop, self.index.datatypes, enums=self.index.enumerations)
+
+    def _initial_and_blank(self, prop: Property) -> tuple[object, object]:
+        """A datum's initial value and what an output not given writes into it."""
+        held = self._initial(prop)
+        enums = self.index.enumerations
+        return held, values.blank(prop, held, self.index.datatypes, enums)
 
 
 def _vertex_name(vertex: Vertex) -> str:

@@ -147,6 +147,7 @@ class DataItem:
     type: str | None
     default: Value  # the model's default (None: none given)
     initial: Any  # what it holds at start: the default, typed, else the type's zero
+    zero: Any  # what an output the behaviour did not give writes (`values.blank`)
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,6 +165,7 @@ class BehaviourInfo:
     ros_kind: str | None = None
     ros_name: str | None = None
     ros_type: str | None = None
+    sequences: frozenset[str] = frozenset()  # identifiers of inputs and outputs that are lists
 
 
 @dataclass(frozen=True, slots=True)

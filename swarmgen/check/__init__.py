@@ -13,6 +13,7 @@ from swarmgen.check.hardware import check_capabilities, check_parameters
 from swarmgen.check.livelock import check_livelocks
 from swarmgen.check.naming import check_collisions, check_output_paths
 from swarmgen.check.reachability import check_reachability
+from swarmgen.check.ros_interfaces import check_ros_interfaces
 from swarmgen.check.size import check_size
 from swarmgen.check.structure import (
     check_initial_states,
@@ -25,6 +26,7 @@ from swarmgen.check.types import check_types
 from swarmgen.check.wellformed import check_wellformed
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model
+from swarmgen.ros.idl_index import InterfaceIndex
 
 Rule = Callable[[Model], list[Diagnostic]]
 
@@ -51,14 +53,17 @@ RULES: tuple[Rule, ...] = (
 )
 
 
-def run(model: Model) -> list[Diagnostic]:
-    """Every rule's findings, in rule order (the pipeline sorts them by position)."""
+def run(model: Model, interfaces: InterfaceIndex | None = None) -> list[Diagnostic]:
+    """Every rule's findings, in rule order (the pipeline sorts them by position), then the
+    declared ROS types against `interfaces` when the pipeline loaded an index."""
     found: list[Diagnostic] = []
     for rule in RULES:
         findings = rule(model)
         found.extend(findings)
         if rule is check_size and findings:
-            break  # the later rules would walk the inlined machine; `may_lower` is then False
+            return found  # the later rules would walk the inlined machine; `may_lower` is False
+    if interfaces is not None:
+        found.extend(check_ros_interfaces(model, interfaces))
     return found
 
 

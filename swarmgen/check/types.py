@@ -1,40 +1,53 @@
 """Types in guards, effects and bindings: comparing a pose with a number, assigning a pose to a
-real, sending a string where the event carries a number. Only what is certainly wrong is
-reported: an operand whose type is not known (an untyped attribute) never causes a diagnostic.
+real, sending a string where the event carries a number, an enumeration literal that does not
+exist, comparing sequences. Only what is certainly wrong is reported: an operand whose type is
+not known (an untyped attribute) never causes a diagnostic.
+
+Type classes: `number`, `bool`, `string`, `null`, a data type's or an enumeration's name, and
+`T[]` for a sequence of `T` (a property with multiplicity `*` or above 1).
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import difflib
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
+from swarmgen.ir.primitives import Primitive, primitive
 from swarmgen.ir.query import ModelIndex, walk
 from swarmgen.span import Span
 
-_NUMBER = {"real", "double", "float", "integer", "int", "long", "unlimitednatural", "number"}
-_BOOL = {"boolean", "bool"}
-_STRING = {"string", "str"}
+# primitive type -> its type class (Real and Integer are both numbers in every target)
+_CLASSES = {
+    Primitive.REAL: "number",
+    Primitive.INTEGER: "number",
+    Primitive.BOOLEAN: "bool",
+    Primitive.STRING: "string",
+}
 _ARITHMETIC = {"+", "-", "*", "/", "%"}
 _ORDER = {"<", "<=", ">", ">="}
 _WORDS = {"number": "a number", "bool": "a boolean", "string": "a string", "null": "null"}
 
 
 def category(type_name: str | None, datatypes: set[str]) -> str | None:
-    """The type class (number, bool, string, a datatype) of a property type; None if unknown."""
+    """The type class (number, bool, string, a data type or enumeration) of a property type;
+    None if unknown (`datatypes` holds the names of both)."""
     if type_name is None:
         return None
-    lowered = type_name.lower()
-    if lowered in _NUMBER:
-        return "number"
-    if lowered in _BOOL:
-        return "bool"
-    if lowered in _STRING:
-        return "string"
+    kind = primitive(type_name)
+    if kind is not None:
+        return _CLASSES[kind]
     return type_name if type_name in datatypes else None
+
+
+def of(prop: Property, known: set[str]) -> str | None:
+    """A property's type class: its type's, as a sequence (`T[]`) when it is multi-valued."""
+    kind = category(prop.type, known)
+    return f"{kind}[]" if kind is not None and prop.many else kind
 
 
 def _text(e: expr.Expr, limit: int = 80) -> str:
@@ -45,6 +58,8 @@ def _text(e: expr.Expr, limit: int = 80) -> str:
 
 
 def _word(kind: str) -> str:
+    if kind.endswith("[]"):
+        return f"a sequence of {kind[:-2]}"
     return _WORDS.get(kind, f"a {kind}")
 
 
@@ -53,14 +68,20 @@ class _Scope:
     names: dict[str, str | None]
     fields: dict[str, str | None]
     datatype_fields: dict[str, dict[str, str | None]]
+    enums: Mapping[str, tuple[str, ...]]
 
 
 class _Typer:
     def __init__(self, scope: _Scope) -> None:
         self.scope = scope
         self.errors: list[str] = []
+        self.literals: list[tuple[str, str, str]] = []  # (enumeration, literal, text)
 
     def infer(self, e: expr.Expr) -> str | None:
+        if isinstance(e, expr.Const) and e.enum is not None:
+            if e.value not in self.scope.enums.get(e.enum, ()):
+                self.literals.append((e.enum, str(e.value), _text(e)))
+            return e.enum
         if isinstance(e, expr.Const):
             return _const(e.value)
         if isinstance(e, expr.Name):
@@ -97,10 +118,16 @@ class _Typer:
         if e.op in {"and", "or"}:
             return "bool"
         if e.op in {"==", "!="}:
-            if left and right and left != right and "null" not in (left, right):
+            if any(side and side.endswith("[]") for side in (left, right)):
+                # Python compares lists by value, ECMAScript arrays by identity
+                self.errors.append(f"sequences cannot be compared: `{_text(e)}`")
+            elif left and right and left != right and "null" not in (left, right):
                 self.errors.append(
                     f"comparing {_word(left)} with {_word(right)} is always {e.op == '!='}: `{_text(e)}`"
                 )
+            elif any(side in self.scope.datatype_fields for side in (left, right)):
+                # Python compares dicts by value, ECMAScript objects by identity
+                self.errors.append(f"data type values cannot be compared: `{_text(e)}`")
             return "bool"
         allowed = {"number", "string"} if e.op in _ORDER or e.op == "+" else {"number"}
         for side in (left, right):
@@ -132,29 +159,27 @@ def _compatible(target: str | None, value: str | None) -> bool:
 def check_types(model: Model) -> list[Diagnostic]:
     """Report guards, actions and bindings whose operand types certainly do not fit."""
     index = ModelIndex(model)
-    datatypes = {d.name for d in model.datatypes}
+    datatypes = {d.name for d in model.datatypes} | {e.name for e in model.enumerations}
     datatype_fields = {
-        d.name: {f.name: category(f.type, datatypes) for f in d.fields} for d in model.datatypes
+        d.name: {f.name: of(f, datatypes) for f in d.fields} for d in model.datatypes
     }
+    enums = {e.name: e.literals for e in model.enumerations}
     found: list[Diagnostic] = []
     for machine in model.machines:
-        names = {n: category(p.type, datatypes) for n, p in index.data_scope[machine.id].items()}
+        names = {n: of(p, datatypes) for n, p in index.data_scope[machine.id].items()}
         states = {p.vertex.id: p.vertex for p in walk(machine) if isinstance(p.vertex, State)}
         for transition in machine.transitions:
             fields = _fields(index, transition, states, datatypes)
-            typer = _Typer(_Scope(names, fields, datatype_fields))
+            typer = _Typer(_Scope(names, fields, datatype_fields, enums))
             found += _transition(index, typer, transition, datatypes)
-        empty = _Scope(names, {}, datatype_fields)
+        empty = _Scope(names, {}, datatype_fields, enums)
         for state in states.values():
             typer = _Typer(empty)
             for action in (*state.entry, *state.exit):
                 _action(index, typer, action, datatypes)
             if state.activity is not None:
                 behaviour = index.behaviours.get(state.activity.behaviour)
-                inputs = {
-                    p.name: category(p.type, datatypes)
-                    for p in (behaviour.inputs if behaviour else ())
-                }
+                inputs = {p.name: of(p, datatypes) for p in (behaviour.inputs if behaviour else ())}
                 for binding in state.activity.bindings:
                     value = typer.infer(binding.value)
                     if not _compatible(inputs.get(binding.name), value):
@@ -162,7 +187,7 @@ def check_types(model: Model) -> list[Diagnostic]:
                             f"input '{binding.name}' is {_word(inputs[binding.name] or '')}, "
                             f"bound to {_word(value or '')}"
                         )
-            found += _report(typer.errors, state.span)
+            found += _report(typer, state.span)
     return found
 
 
@@ -179,7 +204,7 @@ def _fields(
             call = state.activity if state is not None else None
             behaviour = index.behaviours.get(call.behaviour) if call is not None else None
             props = behaviour.outputs if behaviour is not None else ()
-        per_trigger.append({p.name: category(p.type, datatypes) for p in props})
+        per_trigger.append({p.name: of(p, datatypes) for p in props})
     if not per_trigger:
         return {}
     merged = dict(per_trigger[0])
@@ -197,7 +222,7 @@ def _transition(
         typer.infer(transition.guard)
     for action in transition.effect:
         _action(index, typer, action, datatypes)
-    return _report(typer.errors, transition.span)
+    return _report(typer, transition.span)
 
 
 def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: set[str]) -> None:
@@ -210,7 +235,7 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
             )
         return
     event = index.events_by_name.get(action.event)
-    fields = {f.name: category(f.type, datatypes) for f in (event.fields if event else ())}
+    fields = {f.name: of(f, datatypes) for f in (event.fields if event else ())}
     for arg in action.args:
         value = typer.infer(arg.value)
         if not _compatible(fields.get(arg.name), value):
@@ -219,8 +244,18 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
             )
 
 
-def _report(errors: list[str], span: Span) -> list[Diagnostic]:
-    return [dg.TYPE_ERROR.at(span, error=message) for message in _unique(errors)]
+def _report(typer: _Typer, span: Span) -> list[Diagnostic]:
+    found = [dg.TYPE_ERROR.at(span, error=message) for message in _unique(typer.errors)]
+    for enum, literal, text in dict.fromkeys(typer.literals):
+        literals = typer.scope.enums.get(enum, ())
+        close = difflib.get_close_matches(literal, literals, n=1)
+        values = {"enum": enum, "literal": literal, "text": text}
+        if close:
+            found.append(dg.UNKNOWN_LITERAL.at(span, suggestion=close[0], **values))
+        else:
+            shown = ", ".join(literals) or "(none)"
+            found.append(dg.UNKNOWN_LITERAL.at(span, "none-close", literals=shown, **values))
+    return found
 
 
 def _unique(items: list[str]) -> Iterator[str]:

@@ -166,6 +166,28 @@ DISABLE = click.option(
 )
 
 
+def _interface_dirs(
+    ctx: click.Context, param: click.Parameter, value: tuple[Path, ...]
+) -> tuple[Path, ...]:
+    """Every `--interfaces` value must be a directory: otherwise one line and exit 2."""
+    for directory in value:
+        if not directory.is_dir():
+            fail(f"--interfaces {console.shown(directory)}: not a directory")
+    return value
+
+
+INTERFACES = click.option(
+    "--interfaces",
+    "interfaces",
+    multiple=True,
+    metavar="DIR",
+    type=PATH,
+    callback=_interface_dirs,
+    help="A directory of ROS interface definitions (pkg/msg|srv|action/Name.*) searched after "
+    "the installed packages (repeatable; docs/ros2.md).",
+)
+
+
 def record_options(help_text: str) -> Callable[[Callable[P, R]], Callable[P, R]]:
     """`--record DIR` (described by `help_text`) and `--storage`, for replay and simulate."""
 

@@ -15,6 +15,7 @@ from swarmgen.backends import names as backend_names
 from swarmgen.commands.common import (
     DISABLE,
     FORMAT,
+    INTERFACES,
     MODEL,
     PATH,
     STRICT,
@@ -45,6 +46,7 @@ from swarmgen.commands.common import (
     type=PathType(path_type=Path, exists=True, file_okay=False),
     help="A directory of Jinja2 templates used before the shipped ones (same relative paths).",
 )
+@INTERFACES
 @FORMAT
 @STRICT
 @DISABLE
@@ -55,13 +57,16 @@ def compile_(
     check: bool,
     backends: tuple[str, ...],
     templates: Path | None,
+    interfaces: tuple[Path, ...],
     fmt: str,
     strict: bool,
     disabled: tuple[str, ...],
 ) -> None:
     """Compile MODEL into OUTPUT (SCXML and every backend), replacing it atomically."""
     check_codes(disabled)
-    result = pipeline.compile_model(model, backends=backends or None, templates=templates)
+    result = pipeline.compile_model(
+        model, backends=backends or None, templates=templates, interfaces=interfaces
+    )
     diagnostics = dg.apply_options(result.validation.diagnostics, strict=strict, disabled=disabled)
     emit_diagnostics(diagnostics, fmt, to_stdout=False)
     if dg.has_errors(diagnostics) and result.files:

@@ -11,23 +11,38 @@ import click
 
 from swarmgen import __version__, console, pipeline
 from swarmgen import diagnostics as dg
-from swarmgen.commands.common import DISABLE, FORMAT, PATH, STRICT, check_codes, guarded
+from swarmgen.commands.common import (
+    DISABLE,
+    FORMAT,
+    INTERFACES,
+    PATH,
+    STRICT,
+    check_codes,
+    guarded,
+)
 
 Found = list[tuple[Path, list[dg.Diagnostic]]]
 
 
 @click.command()
 @click.argument("models", nargs=-1, required=True, type=PATH, metavar="MODEL...")
+@INTERFACES
 @FORMAT
 @STRICT
 @DISABLE
 @guarded
-def validate(models: tuple[Path, ...], fmt: str, strict: bool, disabled: tuple[str, ...]) -> None:
+def validate(
+    models: tuple[Path, ...],
+    interfaces: tuple[Path, ...],
+    fmt: str,
+    strict: bool,
+    disabled: tuple[str, ...],
+) -> None:
     """Check each MODEL and print its diagnostics (exit 0 clean, 1 errors, 2 unreadable)."""
     check_codes(disabled)
     found: Found = []
     for model in models:
-        diagnostics = pipeline.validate(model).diagnostics
+        diagnostics = pipeline.validate(model, interfaces).diagnostics
         found.append((model, dg.apply_options(diagnostics, strict=strict, disabled=disabled)))
         if fmt == "text":  # streamed, model by model, as a linter does
             _print(dg.render_text(found[-1][1]))

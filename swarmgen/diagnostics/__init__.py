@@ -2,16 +2,17 @@
 as text, JSON or SARIF.
 
 Every stage returns its diagnostics instead of raising on model errors. Codes and their message
-templates are registered once (`codes`, `codes_checks`), so that `docs/diagnostics.md`, the
+templates are registered once (`codes`, `codes_checks`, `codes_ros`), so that `docs/diagnostics.md`, the
 renderers and every stage agree; `model` holds the data types, `render` the output formats.
 """
 
 from __future__ import annotations
 
-from swarmgen.diagnostics import codes, codes_checks
+from swarmgen.diagnostics import codes, codes_checks, codes_ros
 from swarmgen.diagnostics.codes import *  # noqa: F403 (the codes are the public API)
 from swarmgen.diagnostics.codes import CODES, active_codes, register, retire
 from swarmgen.diagnostics.codes_checks import *  # noqa: F403
+from swarmgen.diagnostics.codes_ros import *  # noqa: F403
 from swarmgen.diagnostics.model import (
     DEFAULT,
     Code,
@@ -63,3 +64,4 @@ __all__ = [
 ]
 __all__ += codes.__all__
 __all__ += codes_checks.__all__
+__all__ += codes_ros.__all__

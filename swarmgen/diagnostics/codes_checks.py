@@ -422,6 +422,20 @@ ROS_NAME_COLLISION = register(
     },
     notes={"at": "'{name}' is at {where}"},
 )
+UNKNOWN_LITERAL = register(
+    "SG218",
+    "unknown-literal",
+    "an expression names a literal its enumeration does not have",
+    ERROR,
+    message="enumeration '{enum}' has no literal '{literal}': `{text}`",
+    hint="did you mean `{enum}.{suggestion}`?",
+    variants={
+        "none-close": M(
+            "enumeration '{enum}' has no literal '{literal}': `{text}`",
+            "write one of: {literals}",
+        )
+    },
+)
 
 __all__ = [
     "BAD_COUNT",
@@ -459,5 +473,6 @@ __all__ = [
     "UNEXPECTED_ELEMENT",
     "UNHANDLED_OUTCOME",
     "UNKNOWN_KIND",
+    "UNKNOWN_LITERAL",
     "UNREACHABLE_STATE",
 ]

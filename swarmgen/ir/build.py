@@ -17,6 +17,7 @@ from swarmgen.ir import acyclic
 from swarmgen.ir.build_classes import (
     class_ancestry,
     read_datatype,
+    read_enumeration,
     read_hardware,
     read_member,
     read_swarm,
@@ -42,6 +43,9 @@ def build(raw: RawModel) -> tuple[Model, list[Diagnostic]]:
     ancestry = class_ancestry(b, classes)
     hardware_classes = {e.id for e in classes if e.id and b.stereotype(e, HARDWARE_KINDS)}
     b.diags += acyclic.class_cycles(raw, elements, hardware_classes)
+    enumerations = tuple(read_enumeration(e) for e in elements if e.uml_type == "Enumeration")
+    for enumeration in enumerations:  # before any property: defaults name their literals
+        b.enumerations.setdefault(enumeration.name, enumeration)
     datatypes = tuple(read_datatype(b, e) for e in elements if e.uml_type == "DataType")
     hardware = tuple(h for e in classes if (h := read_hardware(b, e, ancestry)) is not None)
     hardware_ids = {h.id for h in hardware}
@@ -67,6 +71,7 @@ def build(raw: RawModel) -> tuple[Model, list[Diagnostic]]:
         source=raw.file,
         exporter=raw.exporter,
         datatypes=datatypes,
+        enumerations=enumerations,
         hardware=hardware,
         member_types=members,
         swarms=swarms,

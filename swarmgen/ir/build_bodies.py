@@ -53,7 +53,7 @@ def actions_of(
         )
         return ()
     try:
-        return expr.parse_actions(text)
+        return tuple(expr.resolve_action_enums(a, b.enumerations) for a in expr.parse_actions(text))
     except expr.ExprError as err:
         error = quote_error(text, err)
         b.diags.append(dg.EFFECT_SYNTAX.at(behaviour.span, what=what, error=error, hint=err.hint))
@@ -80,7 +80,10 @@ def activity_call(
     bindings: tuple[expr.Binding, ...] = ()
     if text.strip():
         try:
-            bindings = expr.parse_bindings(text)
+            bindings = tuple(
+                expr.Binding(name=n.name, value=expr.resolve_enums(n.value, b.enumerations))
+                for n in expr.parse_bindings(text)
+            )
         except expr.ExprError as err:
             error = quote_error(text, err)
             b.diags.append(dg.BINDING_ERROR.at(element.span, error=error, hint=err.hint))

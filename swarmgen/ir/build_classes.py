@@ -15,6 +15,7 @@ from swarmgen.ir.literals import (
 )
 from swarmgen.ir.nodes import (
     DataType,
+    Enumeration,
     HardwareComponent,
     MemberType,
     Part,
@@ -46,12 +47,27 @@ def class_ancestry(b: Builder, classes: list[RawElement]) -> dict[str, tuple[str
 
 
 def read_datatype(b: Builder, element: RawElement) -> DataType:
-    """A DataType with its fields."""
+    """A DataType with its fields and, when stereotyped «RosMessage», the ROS message it is."""
+    app = b.stereotype(element, {"RosMessage"})
+    ros_type = (app.tags.get("rosType") or "").strip() if app is not None else ""
     return DataType(
         id=element.id or element.span.path,
         name=element.name,
         ident=identifier(element.name),
         fields=tuple(b.prop(a) for a in element.kids("ownedAttribute")),
+        ros_type=ros_type or None,
+        span=element.span,
+    )
+
+
+def read_enumeration(element: RawElement) -> Enumeration:
+    """An Enumeration with its literals' names (unnamed and repeated literals are dropped)."""
+    literals = (lit.name for lit in element.kids("ownedLiteral") if lit.name)
+    return Enumeration(
+        id=element.id or element.span.path,
+        name=element.name,
+        ident=identifier(element.name),
+        literals=tuple(dict.fromkeys(literals)),
         span=element.span,
     )
 

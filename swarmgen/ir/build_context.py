@@ -9,6 +9,7 @@ from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend.raw import RawElement, RawModel, StereotypeApplication
 from swarmgen.ir.literals import (
+    INTEGER_TEXT,
     BadLiteral,
     literal_text,
     literal_value,
@@ -17,6 +18,7 @@ from swarmgen.ir.literals import (
 from swarmgen.ir.nodes import (
     Behaviour,
     BehaviourKind,
+    Enumeration,
     Event,
     HardwareKind,
     Property,
@@ -36,6 +38,7 @@ KNOWN_STEREOTYPES: dict[str, frozenset[str]] = {
     "CommunicationInterface": frozenset({"communicationType", "communicationParams"}),
     "BehaviorLibrary": frozenset(),
     "SwarmEvent": frozenset({"sender", "scope"}),
+    "RosMessage": frozenset({"rosType"}),  # on a DataType: the ROS message it is (profile.md)
     **{k: _BEHAVIOUR_TAGS for k in BEHAVIOUR_KINDS},
 }
 
@@ -51,6 +54,7 @@ class Builder:
     behaviours: dict[str, Behaviour] = field(default_factory=dict)
     events_by_signal: dict[str, Event] = field(default_factory=dict)
     events_by_name: dict[str, Event] = field(default_factory=dict)
+    enumerations: dict[str, Enumeration] = field(default_factory=dict)  # by name
 
     # --- helpers
 
@@ -148,8 +152,20 @@ class Builder:
             ident=identifier(element.name),
             type=type_name,
             default=self._default(element, type_name),
+            many=self._many(element),
             span=element.span,
         )
+
+    def _many(self, element: RawElement) -> bool:
+        """Whether the upper multiplicity makes a sequence: `*` (or UML's -1) or above 1; a
+        text that is no number is a single value (swarm parts report it: SG022)."""
+        upper = element.first("upperValue")
+        if upper is None:
+            return False
+        text = upper.attrs.get("value", "1").strip()
+        if text in {"*", "-1"}:
+            return True
+        return INTEGER_TEXT.fullmatch(text) is not None and int(text[:19]) > 1
 
     def _default(self, element: RawElement, type_name: str | None) -> Value:
         """The default, if generated code can hold it exactly and it is of the declared type
@@ -157,6 +173,9 @@ class Builder:
         spec = element.first("defaultValue")
         if spec is None:
             return None
+        enumeration = self.enumerations.get(type_name or "")
+        if enumeration is not None:
+            return self._literal_default(element, spec, enumeration)
         value = literal_value(spec)
         if not isinstance(value, BadLiteral):
             bad = unrepresentable(value, type_name)
@@ -170,6 +189,30 @@ class Builder:
                 name=element.name,
                 problem=value.problem,
                 hint=value.hint,
+            )
+        )
+        return None
+
+    def _literal_default(
+        self, element: RawElement, spec: RawElement, enumeration: Enumeration
+    ) -> Value:
+        """An enumeration-typed default: a literal by reference (`InstanceValue`, UML2) or by
+        name (Modelio's `Expression symbol`, a `LiteralString`)."""
+        if spec.uml_type == "InstanceValue":
+            target = self.ref(spec, "instance")
+            text = target.name if target is not None else ""
+        else:
+            value = literal_value(spec)
+            text = value.strip() if isinstance(value, str) else literal_text(spec)
+        if text in enumeration.literals:
+            return text
+        self.diags.append(
+            dg.BAD_DEFAULT.at(
+                element.span,
+                value=short(text),
+                name=element.name,
+                problem=f"is not a literal of {enumeration.name}",
+                hint=f"write one of {', '.join(enumeration.literals) or '(none)'}",
             )
         )
         return None

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 from swarmgen.frontend.raw import RawElement
 from swarmgen.ir.nodes import Value
+from swarmgen.ir.primitives import Primitive, primitive
 
 MAX_SAFE_INTEGER = 2**53 - 1  # ECMAScript holds no larger integer exactly
 
@@ -85,16 +86,11 @@ def _real(text: str) -> float | BadLiteral:
     return value
 
 
-_TYPE_OF_VALUE: dict[str, tuple[type, ...]] = {
-    "integer": (int,),
-    "int": (int,),
-    "long": (int,),
-    "unlimitednatural": (int,),
-    "real": (int, float),
-    "double": (int, float),
-    "float": (int, float),
-    "boolean": (bool,),
-    "bool": (bool,),
+# what a default of each primitive type may be (a String default is any text)
+_TYPE_OF_VALUE: dict[Primitive, tuple[type, ...]] = {
+    Primitive.INTEGER: (int,),
+    Primitive.REAL: (int, float),
+    Primitive.BOOLEAN: (bool,),
 }
 
 
@@ -103,7 +99,8 @@ def unrepresentable(value: Value, type_name: str | None) -> BadLiteral | None:
     property's primitive type when it has one."""
     if isinstance(value, int) and not isinstance(value, bool) and abs(value) > MAX_SAFE_INTEGER:
         return BadLiteral("cannot be represented exactly in the generated code", _INTEGER_HINT)
-    wanted = _TYPE_OF_VALUE.get((type_name or "").strip().lower())
+    kind_of = primitive(type_name)
+    wanted = None if kind_of is None else _TYPE_OF_VALUE.get(kind_of)
     if value is None or wanted is None:
         return None
     if isinstance(value, bool) != (bool in wanted) or not isinstance(value, wanted):

@@ -35,8 +35,9 @@ class Property(Node):
     id: str
     name: str
     ident: str
-    type: str | None = None  # primitive name (Real, Integer, String, Boolean) or data type name
+    type: str | None = None  # a primitive (Real, Integer, String, Boolean), data type, enumeration
     default: Value = None
+    many: bool = False  # upper multiplicity `*` or above 1: a sequence (a list) of `type`
     span: Span
 
 
@@ -47,6 +48,17 @@ class DataType(Node):
     name: str
     ident: str
     fields: tuple[Property, ...]
+    ros_type: str | None = None  # the ROS message it is (`geometry_msgs/msg/Pose`), «RosMessage»
+    span: Span
+
+
+class Enumeration(Node):
+    """A UML Enumeration: a value is the name of one of its literals (a string at run time)."""
+
+    id: str
+    name: str
+    ident: str
+    literals: tuple[str, ...]  # in model order; the first is the zero
     span: Span
 
 
@@ -311,6 +323,7 @@ class Model(Node):
     source: str
     exporter: str
     datatypes: tuple[DataType, ...]
+    enumerations: tuple[Enumeration, ...] = ()
     hardware: tuple[HardwareComponent, ...]
     member_types: tuple[MemberType, ...]
     swarms: tuple[Swarm, ...]

@@ -9,6 +9,7 @@ from functools import cached_property
 from swarmgen.ir.nodes import (
     Behaviour,
     DataType,
+    Enumeration,
     Event,
     Machine,
     MemberType,
@@ -100,6 +101,7 @@ class ModelIndex:
         self.behaviours: dict[str, Behaviour] = {b.id: b for b in model.behaviours}
         self.events: dict[str, Event] = {e.id: e for e in model.events}
         self.datatypes: dict[str, DataType] = {d.name: d for d in model.datatypes}
+        self.enumerations: dict[str, Enumeration] = {e.name: e for e in model.enumerations}
         self.events_by_name: dict[str, Event] = {}
         for event in model.events:
             self.events_by_name.setdefault(event.name, event)

@@ -3,11 +3,13 @@ Python prefix (by default this venv); skipped when the same sources are already 
 
 from __future__ import annotations
 
+import argparse
 import fcntl
 import hashlib
 import logging
 import os
 import re
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -26,7 +28,7 @@ _log = logging.getLogger(__name__)
 BUILD_STAMP = ".swarmgen-build-hash"
 _INSTALL_MANIFEST = ".swarmgen-install-manifest"
 # Bump when the build recipe changes in a way that must rebuild installed packages.
-_RECIPE_VERSION = "1"
+_RECIPE_VERSION = "2"  # 2: C and Python only, Ninja, one C type support
 
 
 class InterfaceBuildError(SwarmgenError, RuntimeError):
@@ -151,7 +153,7 @@ def build_and_install(
     prefix: Path | None = None,
     build_dir: Path | None = None,
     *,
-    jobs: int = 2,
+    jobs: int | None = None,
     timeout: float = 900.0,
 ) -> Path:
     """Build the interface package in `package_dir` with cmake and install it into `prefix`.
@@ -183,7 +185,7 @@ def build_and_install(
         _remove_previous_install(prefix, share)
         with tempfile.TemporaryDirectory(prefix=f"swarmgen-{package}-build-") as tmp:
             build = build_dir.resolve() if build_dir else Path(tmp)
-            _cmake(package_dir, prefix, build, env, jobs, timeout)
+            _cmake(package_dir, prefix, build, env, jobs or os.cpu_count() or 2, timeout)
             manifest = build / "install_manifest.txt"
             if manifest.is_file():
                 (share / _INSTALL_MANIFEST).write_text(
@@ -209,6 +211,36 @@ def _build_env(prefix: Path) -> dict[str, str]:
     return env
 
 
+def configure_options(env: dict[str, str]) -> list[str]:
+    """The cmake options that make the build fast: Ninja when installed (faster than make at
+    the same -j), no tests, and only the C type support the RMW of this environment loads (the
+    generated CMakeLists.txt then skips generating the others)."""
+    options = ["-G", "Ninja"] if shutil.which("ninja", path=env.get("PATH")) else []
+    options.append("-DBUILD_TESTING=OFF")
+    typesupport = _rmw_typesupport(env)
+    if typesupport:
+        options.append(f"-DSTATIC_ROSIDL_TYPESUPPORT_C={typesupport}")
+    return options
+
+
+# The C type support each RMW implementation of the ROS wheels loads first.
+_RMW_TYPESUPPORT_C = {"rmw_fastrtps_cpp": "rosidl_typesupport_fastrtps_c"}
+
+
+def _rmw_typesupport(env: dict[str, str]) -> str | None:
+    """The one C type support to build, or None (all of them) when the RMW is another one or
+    its type support is not installed."""
+    rmw = env.get("RMW_IMPLEMENTATION") or "rmw_fastrtps_cpp"  # rclpy's default
+    typesupport = _RMW_TYPESUPPORT_C.get(rmw)
+    if typesupport is None:
+        return None
+    for prefix in env.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        index = Path(prefix) / "share" / "ament_index" / "resource_index"
+        if prefix and (index / "rosidl_typesupport_c" / typesupport).is_file():
+            return typesupport
+    return None
+
+
 def _cmake(
     package_dir: Path, prefix: Path, build: Path, env: dict[str, str], jobs: int, timeout: float
 ) -> None:
@@ -220,8 +252,8 @@ def _cmake(
             str(package_dir),
             "-B",
             str(build),
+            *configure_options(env),
             f"-DCMAKE_INSTALL_PREFIX={prefix}",
-            "-DBUILD_TESTING=OFF",
             f"-DPython3_EXECUTABLE={sys.executable}",
         ],
         env,
@@ -234,3 +266,19 @@ def _cmake(
         timeout,
         "build",
     )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m swarmgen.ros.build --fix-wheels [PREFIX]`: what `make ros` runs so that cmake
+    and colcon work with the wheels (the fix `build_and_install` also applies before a build)."""
+    parser = argparse.ArgumentParser(prog="python -m swarmgen.ros.build", description=main.__doc__)
+    parser.add_argument("--fix-wheels", action="store_true", required=True)
+    parser.add_argument("prefix", nargs="?", type=Path, default=Path(sys.prefix))
+    args = parser.parse_args(argv)
+    changed = fix_wheel_cmake_files(args.prefix)
+    print(f"fixed the wheel build paths in {len(changed)} CMake files under {args.prefix}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -237,6 +237,7 @@ class ChartBuilder:
         self._nodes: dict[str, Node] = {}
         self._pending: list[tuple[str, tuple[str, ...], tuple[str, ...], dict[str, Any]]] = []
         self._initials: list[tuple[str | None, tuple[str, ...], Action | None]] = []
+        self._zeros: dict[str, Any] = {}
         self._name = name
         self._data = dict(data or {})
         self._names: dict[str, str] = {}
@@ -323,6 +324,14 @@ class ChartBuilder:
             self._name, self._root, dict(self._nodes), self._data, self._names, self._events
         )
 
+    def zeros(self, values: Mapping[str, Any]) -> None:
+        """What an output a behaviour did not give writes into these data, where that is not
+        `zero_like` of their initial value (an enumeration's zero is its first literal)."""
+        self._zeros.update(values)
+
+    def _zero(self, key: str) -> Any:
+        return self._zeros[key] if key in self._zeros else zero_like(self._data.get(key))
+
     def _finalize(self, node: Node, call: Call) -> Transition:
         """The first transition of a behaviour's state (SCXML `<finalize>` semantics): on
         `done.invoke.<id>.<outcome>` it writes the outputs into member data, an output the
@@ -330,7 +339,7 @@ class ChartBuilder:
         internal event `outcome.<id>.<outcome>` when the outcome is declared, so guards and
         effects (where `event.<output>` reads the datum) see the new values, whether or not a
         transition takes the outcome."""
-        zeros = {key: zero_like(self._data.get(key)) for _, key in call.results}
+        zeros = {key: self._zero(key) for _, key in call.results}
         prefix = f"{FINALIZE_PREFIX}{node.id}."
         declared = frozenset(call.outcomes)
 

@@ -4,6 +4,9 @@
     python -m <package> --swarm --time-scale 0.01 --duration 5
     python -m <package> --swarm --library my_platform:library     # the platform's behaviours
 
+Installed plug-ins (entry points of the group `<package>.behaviours`, docs/plugins.md) replace
+single simulated behaviours; `--library` comes before them, and then nothing is simulated.
+
 Prints one JSON line per processed event and member: time, member, event, active states; and one
 line per behaviour fault (`"fault": ...`, docs/runtime.md). Exit status: 0 when every member ended
 cleanly, 1 when a behaviour failed, was abandoned, blocked the loop or overran the hard deadline
@@ -28,6 +31,7 @@ from typing import Any, NoReturn
 from swarmgen.runtime.args import Parser, finite
 from swarmgen.runtime.engine import Event
 from swarmgen.runtime.member import CANCEL_GRACE, Fault, InMemoryBus, Library, Member
+from swarmgen.runtime.plugins import Chain, PluginError, Plugins
 
 BEAT = 0.05  # seconds between the loop's heartbeats (what the watchdog thread watches)
 BLOCK_AFTER = 0.5  # a loop that misses its heartbeat this long is blocked by a behaviour
@@ -147,6 +151,11 @@ def _parser(prog: str, member_types: Mapping[str, ModuleType]) -> Parser:
         help="the platform's behaviour library instead of the simulated one",
     )
     parser.add_argument(
+        "--no-plugins",
+        action="store_true",
+        help="ignore the behaviours installed plug-ins provide (entry points)",
+    )
+    parser.add_argument(
         "--grace",
         type=_seconds,
         default=CANCEL_GRACE,
@@ -161,8 +170,10 @@ def main(
     library_factory: Callable[..., Library],
     prog: str = "swarm",
     argv: list[str] | None = None,
+    plugins: Plugins | None = None,
 ) -> int:
-    """The generated package's command line: run members with simulated behaviours."""
+    """The generated package's command line: run members with simulated behaviours, the
+    installed plug-ins of `plugins` (entry points) or the `--library` given."""
     parser = _parser(prog, member_types)
     args = parser.parse_args(argv)
     charts = {kind: module.build() for kind, module in member_types.items()}
@@ -178,7 +189,10 @@ def main(
             for kind, count in composition.items()
             for n in range(1, count + 1)
         ]
-    library = (args.library or library_factory)(args.time_scale)
+    try:
+        library = _behaviours(args, library_factory, plugins, prog)
+    except PluginError as err:
+        parser.error(f"plug-ins: {err}")
     outputs = _declared_outputs(member_types)
     runner = asyncio.Runner()  # its SIGINT handling cancels the run instead of raising anywhere
     try:
@@ -192,6 +206,22 @@ def main(
         _exit(code)
     runner.close()
     return code
+
+
+def _behaviours(
+    args: Any, factory: Callable[..., Library], plugins: Plugins | None, prog: str
+) -> Library:
+    """The `--library` given (else the simulated one) and the installed plug-ins: the command
+    line's library first, then the plug-ins, then the simulated behaviours (only without
+    `--library`: a platform's library is never completed with simulations)."""
+    base: Library = (args.library or factory)(args.time_scale)
+    if plugins is None or args.no_plugins:
+        return base
+    found, providers = plugins.load()
+    if not providers:
+        return base
+    print(f"{prog}: behaviours from plug-ins: {', '.join(map(str, providers))}", file=sys.stderr)
+    return Chain(base, found) if args.library else Chain(found, base)
 
 
 def _reacts(charts: Any, name: str) -> bool:

@@ -19,7 +19,7 @@ from swarmgen.chart.lower import lower
 from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.names import identifier
-from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX, STEP_BOUND, zero_like
+from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX, STEP_BOUND
 
 SCXML_NS = "http://www.w3.org/2005/07/scxml"
 SG_NS = "urn:swarmgen:scxml:1"
@@ -53,10 +53,11 @@ var $sg = {
     return $sg.fill(v, zero);
   },
   fill: function (v, t) {
-    if (t === null || typeof t !== "object") {
+    if (t === null || typeof t !== "object" || Array.isArray(t)) {
       return (v === undefined || v === null) ? t : v;
     }
-    var g = (v !== undefined && v !== null && typeof v === "object") ? v : {};
+    var g = (v !== undefined && v !== null && typeof v === "object" &&
+             !Array.isArray(v)) ? v : {};
     var r = {};
     for (var k in g) { r[k] = g[k]; }
     for (var f in t) { r[f] = $sg.fill(g[f], t[f]); }
@@ -169,10 +170,13 @@ def js_value(value: Value) -> str:
 
 
 def js_literal(value: object) -> str:
-    """An ECMAScript literal for a JSON-like value: scalars, and objects for data types."""
+    """An ECMAScript literal for a JSON-like value: scalars, objects for data types, arrays
+    for sequences."""
     if isinstance(value, dict):
         items = ", ".join(f"{expr.js_string(str(k))}: {js_literal(v)}" for k, v in value.items())
         return "{" + items + "}"
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(js_literal(v) for v in value) + "]"
     scalar = value if isinstance(value, bool | int | float | str) else None
     return js_value(scalar)
 
@@ -274,7 +278,7 @@ class _Writer:
             (
                 location,
                 f"$sg.value(_event.data, {expr.js_string(output)}, "
-                f"{js_literal(zero_like(self.data[location].initial))})",
+                f"{js_literal(self.data[location].zero)})",
             )
             for output, location in call.results
         ]

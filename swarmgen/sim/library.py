@@ -35,11 +35,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
+from swarmgen.ir.primitives import zero_of
 from swarmgen.runtime.member import Request
 from swarmgen.sim.scenario import Scenario
 from swarmgen.sim.world import FOUND, RESCUED, World
-
-_DEFAULTS: dict[str, Any] = {"Real": 0.0, "Integer": 0, "Boolean": False, "String": ""}
 
 
 @dataclass(eq=False)
@@ -121,7 +120,7 @@ class SimBehaviour:
         if not act.waited:
             return  # nobody waits for it: it runs until preempted
         ticks = host.scenario.timing["default"]
-        outputs = {n: _DEFAULTS.get(t or "") for n, t in host.outputs_of(act.behaviour)}
+        outputs = {n: zero_of(t) for n, t in host.outputs_of(act.behaviour)}
         host.after(act, ticks, lambda: host.finish(act, outcome(act, "succeeded"), outputs))
 
     def stop(self, host: Host, act: Activation) -> None:

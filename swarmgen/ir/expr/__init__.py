@@ -42,6 +42,8 @@ from swarmgen.ir.expr.tree import (
     event_fields,
     free_names,
     replace_fields,
+    resolve_action_enums,
+    resolve_enums,
     walk,
 )
 
@@ -73,6 +75,8 @@ __all__ = [
     "parse_bindings",
     "parse_expr",
     "replace_fields",
+    "resolve_action_enums",
+    "resolve_enums",
     "to_ecmascript",
     "to_python",
     "to_text",

@@ -92,6 +92,8 @@ def _binary_text(b: Binary) -> str:
 def to_text(expr: Expr) -> str:
     """Canonical model-language text: ``parse_expr(to_text(e)) == e``."""
     match expr:
+        case Const(enum=str()):
+            return f"{expr.enum}.{expr.value}"
         case Const():
             return _const_text(expr.value)
         case Name():

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
+from collections.abc import Collection, Iterator
 from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator
@@ -83,10 +83,12 @@ class _Model(BaseModel):
 
 
 class Const(_Model):
-    """A literal: boolean, integer, float, string or null."""
+    """A literal: boolean, integer, float, string or null; `Mode.search` is the string
+    `search` with `enum` set to `Mode` (an enumeration literal, resolved by `ir.build`)."""
 
     kind: Literal["literal"] = "literal"
     value: Value
+    enum: Ident | None = None
 
     @field_validator("value")
     @classmethod
@@ -231,6 +233,29 @@ def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
         left, right = replace_fields(expr.left, names), replace_fields(expr.right, names)
         return Binary(op=expr.op, left=left, right=right)
     return expr
+
+
+def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
+    """`E.lit` read as the literal `lit` of enumeration `E` when `E` is one of `enums` (a
+    string constant that remembers its enumeration; depth is bounded by the parser)."""
+    if isinstance(expr, Attr):
+        if isinstance(expr.obj, Name) and expr.obj.name in enums:
+            return Const(value=expr.name, enum=expr.obj.name)
+        return Attr(obj=resolve_enums(expr.obj, enums), name=expr.name)
+    if isinstance(expr, Unary):
+        return Unary(op=expr.op, operand=resolve_enums(expr.operand, enums))
+    if isinstance(expr, Binary):
+        left, right = resolve_enums(expr.left, enums), resolve_enums(expr.right, enums)
+        return Binary(op=expr.op, left=left, right=right)
+    return expr
+
+
+def resolve_action_enums(action: Action, enums: Collection[str]) -> Action:
+    """An action with its enumeration literals resolved (`resolve_enums`)."""
+    if isinstance(action, Assign):
+        return Assign(target=action.target, value=resolve_enums(action.value, enums))
+    args = tuple(Arg(name=a.name, value=resolve_enums(a.value, enums)) for a in action.args)
+    return type(action)(event=action.event, args=args)
 
 
 def free_names(expr: Expr) -> frozenset[str]:

@@ -13,7 +13,8 @@ seconds (0), on SIGINT/SIGTERM (0), or when action servers are missing (3); 1 wh
 reported errors (a goal aborted by a failing server or with an undeclared outcome among them);
 2, in one line and before ROS starts, for bad arguments (a `--station` time that is not a finite
 number >= 0, an event no member reacts to, a state no member has; counts, times) or a bad
-script. The last line on stdout is a JSON summary.
+script; 2, in one line, when a declared interface cannot be used here (`bindings.BindingError`:
+an unknown type, a field it lacks). The last line on stdout is a JSON summary.
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from rclpy.utilities import remove_ros_args
 
 from ...runtime.args import Parser, number
 from ...runtime.engine import Event as SwarmEvent
+from .bindings import BindingError, resolve
 from .expressions import ScriptError
 from .messages import SWARM_TOPIC, Interfaces
 from .node import MemberNode, MemberOptions
@@ -277,6 +279,15 @@ def _shutdown(executor: Executor, swarm: _Swarm, context: RosContext) -> None:
     rclpy.try_shutdown(context=context)
 
 
+def check_bindings(specs: Mapping[str, MemberSpec]) -> None:
+    """Import every declared interface the members use (BindingError, one line, if one is
+    unusable here: unknown type, unknown field)."""
+    for spec in specs.values():
+        for behaviour in spec.behaviours.values():
+            if behaviour.binding is not None:
+                resolve(behaviour)
+
+
 def main(
     specs: Mapping[str, MemberSpec],
     composition: Mapping[str, int],
@@ -294,6 +305,11 @@ def main(
         check_station(program, specs)
     except ScriptError as err:
         parser.error(str(err))
+    try:  # before ROS starts too: a node failing half-built makes rcl print pages of errors
+        check_bindings(specs)
+    except BindingError as err:
+        print(f"{prog}: {err}", file=sys.stderr)
+        return 2
     context = rclpy.get_default_context()  # the default one: SIGINT/SIGTERM end it cleanly
     rclpy.init(args=["launch_swarm", *raw], context=context)
     executor = make_executor(args.executor, context)
@@ -311,7 +327,7 @@ def main(
         print(json.dumps(summary), flush=True)
         failed = any(m.errors for m in swarm.members) or "server_errors" in summary
         code = 1 if failed else 0
-    except ScriptError as err:
+    except (ScriptError, BindingError) as err:  # BindingError: a member's declared interface
         print(f"{prog}: {err}", file=sys.stderr)
         code = 2
     except (KeyboardInterrupt, ExternalShutdownException):

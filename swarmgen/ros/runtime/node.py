@@ -34,6 +34,7 @@ from ...runtime.chart import Node as ChartNode
 from ...runtime.chart import record
 from ...runtime.engine import Engine
 from ...runtime.engine import Event as SwarmEvent
+from .bindings import BindingError
 from .goals import GoalClient
 from .messages import (
     EVENTS_QOS,
@@ -46,11 +47,20 @@ from .messages import (
 )
 from .process import init_process, spin_until
 from .scheduler import Handle, Scheduler
-from .spec import BehaviourSpec, Field, MemberSpec, Parameter, index_of, namespace_id
+from .spec import (
+    BehaviourSpec,
+    Binding,
+    Field,
+    MemberSpec,
+    Parameter,
+    index_of,
+    namespace_id,
+)
 
 # What generated member modules import from here (`from ._ros.node import ...`).
 __all__ = [
     "BehaviourSpec",
+    "Binding",
     "Field",
     "MemberNode",
     "MemberOptions",
@@ -316,7 +326,13 @@ def run_member(spec: MemberSpec, argv: Sequence[str] | None = None) -> int:
     The process ends when the member reaches its final state, or on SIGINT/SIGTERM.
     """
     context, executor = init_process(argv)
-    member = MemberNode(spec, context=context)
+    try:
+        member = MemberNode(spec, context=context)
+    except BindingError as err:  # a declared interface this environment cannot provide
+        print(f"{spec.node_name}: {err}", file=sys.stderr)
+        executor.shutdown()
+        rclpy.try_shutdown(context=context)
+        return 2
     executor.add_node(member)
     try:
         member.start()

@@ -5,8 +5,10 @@
 The member runs as it does in a swarm (a `MemberNode`: events from `/swarm/events`, behaviours
 as action goals), isolated: what it sends does not come back and model timers do not fire,
 as in `runtime.replay`. Station events of a scenario are published on `/swarm/events`; each
-behaviour is an action server whose goals end when the scenario says so (`complete`), with the
-given outcome and outputs. Before the next input the harness waits until the member is idle.
+behaviour is a scripted server (`servers.ScriptedServers`: its private action, or its declared
+action, service or topic) whose goals end when the scenario says so (`complete`), with the
+given outcome and outputs. Before the next input the harness waits until the member is idle
+(a service request the driver holds counts as idle, as an accepted goal does).
 
 The rules follow `runtime.replay` exactly, so the traces equal the other backends':
 - the steps of a `burst` are resolved (which state a `complete` ends) before any of them is
@@ -17,6 +19,9 @@ The rules follow `runtime.replay` exactly, so the traces equal the other backend
 - a ROS result carries every output: outputs a `complete` step leaves out hold the field's zero
   value, which is what every backend writes for an output a behaviour does not give (the value
   rule, docs/semantics.md); JSON outputs are left empty (absent: the zero of their type).
+- a `complete` that a declared interface cannot carry (an outcome with no field for it, an
+  output its field cannot hold), or that cannot be told apart from another (two states waiting
+  on one topic), is delivered directly too: the trace stays that of every other backend.
 
 One JSON line per scenario is printed: `{"scenario": n, "trace": [...], "stats": {...}}`; the
 stats count (cumulatively) the goals the servers executed, the outcomes that came back as ROS
@@ -34,17 +39,17 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
-from rclpy.action.server import CancelResponse
 from rclpy.context import Context as RosContext
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
 from ...runtime.replay import describe, expand, outcome_event, running_state
-from .messages import EVENTS_QOS, SWARM_TOPIC, Interfaces, encode
+from .messages import EVENTS_QOS, SWARM_TOPIC, Interfaces
 from .node import MemberNode, MemberOptions
 from .process import spin_until
 from .scheduler import Scheduler
-from .servers import scripted_servers
+from .served import Served
+from .servers import ScriptedServers
 from .spec import BehaviourSpec, MemberSpec
 
 NAMESPACE = "/replay"
@@ -65,13 +70,11 @@ class Driver(Node):
         super().__init__("replay_driver", namespace=NAMESPACE, context=context)
         self.interfaces = Interfaces(spec.interfaces)
         self.scheduler = Scheduler(self)
-        self.goals: dict[bytes, tuple[Any, BehaviourSpec]] = {}  # running goals (accepted)
+        self.goals: dict[Any, Served] = {}  # running goals (accepted) by `Served.key`
         self.next_id = 0
         self.started = 0  # goals the servers accepted
         self._publisher = self.create_publisher(self.interfaces.Event, SWARM_TOPIC, EVENTS_QOS)
-        self.servers = scripted_servers(
-            self, self.interfaces, spec.behaviours, self._accepted, self._on_cancel
-        )
+        self.servers = ScriptedServers(self, self.interfaces, spec, self._accepted, self._withdrawn)
 
     def publish(self, name: str, data: Any) -> int:
         """Publish a station event; its id."""
@@ -85,36 +88,26 @@ class Driver(Node):
         """The member hears the station."""
         return self._publisher.get_subscription_count() > 0
 
-    def _accepted(self, behaviour: BehaviourSpec, handle: Any) -> None:
+    def _accepted(self, behaviour: BehaviourSpec, served: Served) -> None:
         self.started += 1
-        self.goals[bytes(handle.goal_id.uuid)] = (handle, behaviour)
+        self.goals[served.key] = served
 
-    def finish(self, goal: bytes, ending: tuple[str, dict[str, Any]] | None) -> None:
-        """End a running goal with (outcome, result fields), or as cancelled (`None`)."""
-        entry = self.goals.pop(goal, None)
-        if entry is None:
+    def finish(self, goal: Any, ending: tuple[str, Any] | None) -> None:
+        """End a running goal with (outcome, its answer), or as cancelled (`None`)."""
+        served = self.goals.pop(goal, None)
+        if served is None:
             return
-        handle, behaviour = entry
-        action = self.interfaces.action(behaviour.action)
 
-        def result(handle: Any) -> Any:
-            if ending is None or handle.is_cancel_requested:
-                handle.canceled()
-                return action.Result(outcome="preempted")
-            outcome, fields = ending
-            if outcome == "aborted":
-                handle.abort()
-            else:
-                handle.succeed()
-            return action.Result(outcome=outcome, **fields)
+        def decide(cancel_requested: bool) -> tuple[str | None, Any]:
+            if ending is None or cancel_requested:
+                return None, served.cancelled()
+            return ending
 
-        handle.execute(result)
+        served.finish(decide)
 
-    def _on_cancel(self, handle: Any) -> CancelResponse:
-        key = bytes(handle.goal_id.uuid)
+    def _withdrawn(self, key: Any) -> None:
         if key in self.goals:  # after rclpy marked the goal as canceling
             self.scheduler.call_later(0.0, partial(self.finish, key, None))
-        return CancelResponse.ACCEPT
 
 
 class Replay:
@@ -133,10 +126,22 @@ class Replay:
             scheduler=self.driver.scheduler,
             context=context,
         )
+        self.member.declared_calls.held = lambda name, number: (name, number) in self.driver.goals
         self.stats = {"goals": 0, "results": 0, "direct": 0, "events": 0}
+        self._topic_waits = sorted(
+            name
+            for name, b in spec.behaviours.items()
+            if b.binding is not None and b.binding.direction == "subscribe"
+        )
         self.executor.add_node(self.driver)
         self.executor.add_node(self.member)
-        self.settle(lambda: self.member.servers_ready() and self.driver.subscribed())
+        self.settle(
+            lambda: (
+                self.member.servers_ready()
+                and self.driver.subscribed()
+                and self.driver.servers.matched()
+            )
+        )
 
     def close(self) -> None:
         """Stop the member and destroy the nodes."""
@@ -152,7 +157,10 @@ class Replay:
             member = self.member
             running = member.running_goal_ids()
             return (
-                condition() and member.idle() and all(goal in self.driver.goals for goal in running)
+                condition()
+                and member.idle()
+                and all(goal in self.driver.goals for goal in running)
+                and all(self.driver.servers.activation(s) is not None for s in self._waiting())
             )
 
         if not spin_until(self.executor, quiet, SETTLE_TIMEOUT, 0.05):
@@ -164,6 +172,7 @@ class Replay:
         """Replay one scenario from a fresh member; its trace (one record per step)."""
         member = self.member
         member.reset()
+        self.driver.servers.forget()  # the activations of the last scenario's topic waits
         member.start()
         self.settle()
         trace = [self._record(0, None)]
@@ -184,9 +193,37 @@ class Replay:
         )
         if node is None:
             return None  # nothing runs that behaviour now: the step has no effect
-        handle = self.member.running_goal(node.id)
-        goal = bytes(handle.goal_id.uuid) if handle is not None else None
-        return node.id, self.member.engine.activation(node.id), goal
+        return node.id, self.member.engine.activation(node.id), self._key(node.id)
+
+    def _key(self, state: str) -> Any:
+        """The driver's key of the goal a state runs now (None: none the driver can end)."""
+        member = self.member
+        handle = member.running_goal(state)
+        if handle is not None:
+            return bytes(handle.goal_id.uuid)
+        call = member.declared_calls.running(state)
+        if call is None:
+            return None
+        behaviour = self._behaviour(state)
+        if call[1] > 0:  # a service request, numbered as the driver numbers its arrivals
+            return behaviour.name, call[1]
+        waiting = [s for s in self._waiting() if self._behaviour(s).name == behaviour.name]
+        return self.driver.servers.activation(state) if waiting == [state] else None
+
+    def _waiting(self) -> list[str]:
+        """The states whose behaviour waits for a message of a topic the driver publishes."""
+        member = self.member
+        return [
+            state
+            for name in self._topic_waits
+            for state in self.driver.servers.states_of(name)
+            if member.declared_calls.running(state) is not None
+        ]
+
+    def _behaviour(self, state: str) -> BehaviourSpec:
+        node = self.member.engine.chart.nodes[state]
+        assert node.call is not None
+        return self.spec.behaviours[node.call.behaviour]
 
     def _submit(self, step: Step, target: tuple[str, int, bytes | None] | None) -> None:
         member = self.member
@@ -200,9 +237,16 @@ class Replay:
         state, activation, goal = target
         outcome = str(step.get("outcome", "succeeded"))
         outputs = dict(step.get("outputs") or {})
-        handle = member.running_goal(state)
-        current = bytes(handle.goal_id.uuid) if handle is not None else None
-        if goal is None or current != goal or goal not in self.driver.goals:
+        served = self.driver.goals.get(goal) if goal is not None else None
+        answer = None
+        if served is not None and self._key(state) == goal:
+            try:  # an output its field cannot hold: delivered directly (the given value)
+                answer = served.answer(outcome, outputs)
+            except ValueError:
+                served = None
+        else:
+            served = None
+        if served is None:
             node = member.engine.chart.nodes[state]
             member.deliver(
                 member.engine.make_event(
@@ -212,20 +256,13 @@ class Replay:
             self.stats["direct"] += 1
             self.settle()
             return
-        self.driver.finish(goal, (outcome, self._fields(state, outputs)))
+        before = member.declared_calls.running(state)
+        self.driver.finish(goal, (outcome, answer))
         self.stats["results"] += 1
-        self.settle(lambda: goal in member.results)
-
-    def _fields(self, state: str, outputs: Mapping[str, Any]) -> dict[str, Any]:
-        """The result fields for the outputs of a `complete` step (see the module docstring)."""
-        node = self.member.engine.chart.nodes[state]
-        assert node.call is not None
-        behaviour = self.spec.behaviours[node.call.behaviour]
-        return {
-            output.field: encode(output.type, outputs[output.name])
-            for output in behaviour.outputs
-            if output.name in outputs
-        }
+        if isinstance(goal, bytes):  # an action's result
+            self.settle(lambda: goal in member.results)
+        else:  # a response or message ends the member's call
+            self.settle(lambda: member.declared_calls.running(state) != before)
 
     def _record(self, number: int, step: Step | None) -> dict[str, Any]:
         return {

@@ -1,5 +1,6 @@
-"""Simulated behaviours as ROS 2 action servers: one server per behaviour in each member's
-namespace, driven by a script (the ROS counterpart of `runtime.simulated`).
+"""Simulated behaviours as ROS 2 servers: one server per behaviour in each member's namespace,
+of the behaviour's private action or of its declared interface (`servers.ScriptedServers`),
+driven by a script (the ROS counterpart of `runtime.simulated`).
 
 A script maps behaviour names to what a goal does (times are simulated seconds, multiplied by
 the time scale):
@@ -28,6 +29,11 @@ the time scale):
   `tick`, and in `until` also `event` (the event's data) and `sender`.
 Events are published on behalf of the member (sender = member id) with ids from 2**40 up, so
 they never collide with the ids of the member's own events.
+
+A declared interface carries the same script (docs/ros2.md, "Simulated and replayed behaviours
+on declared interfaces"): the goal, request or the state's entry starts it; the outcome becomes
+the goal status, the `success` field or the binding's outcome field, the outputs the fields the
+binding maps; an outcome or output the interface cannot carry is a script failure.
 """
 
 from __future__ import annotations
@@ -41,7 +47,6 @@ from functools import partial
 from typing import Any
 
 import rclpy
-from rclpy.action.server import CancelResponse
 from rclpy.context import Context as RosContext
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
@@ -54,14 +59,12 @@ from .messages import (
     LOCAL_TOPIC,
     SWARM_TOPIC,
     Interfaces,
-    decode,
-    encode,
-    fits,
 )
 from .process import init_process, spin_until
 from .scheduler import Handle, Scheduler
 from .scripts import Emission, Ending, Periodic, Script, Until, load_scripts
-from .servers import scripted_servers
+from .served import Served
+from .servers import ScriptedServers
 from .spec import BehaviourSpec, MemberSpec, index_of, namespace_id
 
 EMITTED_ID_BASE = 1 << 40
@@ -72,7 +75,7 @@ EMITTED_ID_BASE = 1 << 40
 
 @dataclass(eq=False)
 class _Goal:
-    handle: Any
+    served: Served
     behaviour: BehaviourSpec
     names: dict[str, Any]
     timers: list[Handle] = field(default_factory=list)
@@ -124,7 +127,7 @@ class SimulatedBehaviours(Node):
         self.errors: list[str] = []  # script failures (each aborted a goal or an emission)
         self._ids = itertools.count(EMITTED_ID_BASE)
         self._counts: dict[str, int] = {}
-        self._goals: dict[bytes, _Goal] = {}
+        self._goals: dict[Any, _Goal] = {}  # by `Served.key`
         self._create_endpoints()
 
     def _declare_member(
@@ -146,34 +149,31 @@ class SimulatedBehaviours(Node):
         self.member_index = int(self.declare_parameter("member_index", index).value)
 
     def _create_endpoints(self) -> None:
-        """The event publishers, the swarm subscription (for `until`), one server per action."""
+        """The event publishers, the swarm subscription (for `until`), one server per behaviour."""
         event_type = self.interfaces.Event
         self.swarm_publisher = self.create_publisher(event_type, SWARM_TOPIC, EVENTS_QOS)
         self._local = self.create_publisher(event_type, LOCAL_TOPIC, EVENTS_QOS)
         if any(s.until is not None for s in self.scripts.values()):
             self.create_subscription(event_type, SWARM_TOPIC, self._on_event, EVENTS_QOS)
-        self.servers = scripted_servers(
-            self, self.interfaces, self.spec.behaviours, self._accepted, self._on_cancel
+        self.servers = ScriptedServers(
+            self, self.interfaces, self.spec, self._accepted, self._withdrawn
         )
 
-    def _accepted(self, behaviour: BehaviourSpec, handle: Any) -> None:
+    def _accepted(self, behaviour: BehaviourSpec, served: Served) -> None:
         """A goal starts; if starting it fails, it is aborted (an exception here would leave
         rclpy's executor, and stop every node of the process)."""
         try:
-            self._start(behaviour, handle)
+            self._start(behaviour, served)
         except Exception as err:
             self._failed(f"{behaviour.name}: the goal could not start: {err!r}")
-            goal = self._goals.get(bytes(handle.goal_id.uuid)) or _Goal(handle, behaviour, {})
+            goal = self._goals.get(served.key) or _Goal(served, behaviour, {})
             self._finish(goal, Ending(outcome="aborted"))
 
-    def _start(self, behaviour: BehaviourSpec, handle: Any) -> None:
+    def _start(self, behaviour: BehaviourSpec, served: Served) -> None:
         """A goal starts: its end is scheduled (duration, `until`), its emissions too."""
-        action = self.interfaces.action(behaviour.action)
         script = self.scripts.get(behaviour.name) or Script(forever=True)
         count = self._counts[behaviour.name] = self._counts.get(behaviour.name, 0) + 1
-        inputs = {
-            f.name: decode(f.type, getattr(handle.request, f.field))[1] for f in behaviour.inputs
-        }
+        inputs = served.inputs()
         names: dict[str, Any] = {
             "goal": record(inputs),
             "member": Record(id=self.member_id, index=self.member_index, type=self.member_type),
@@ -181,10 +181,10 @@ class SimulatedBehaviours(Node):
             "count": count,
             "tick": 0,
         }
-        goal = _Goal(handle, behaviour, names, until=script.until)
-        self._goals[bytes(handle.goal_id.uuid)] = goal
+        goal = _Goal(served, behaviour, names, until=script.until)
+        self._goals[served.key] = goal
         self.started.append((behaviour.name, "started"))
-        handle.publish_feedback(action.Feedback(status="running"))
+        served.running()
         if not script.forever:
             goal.timers.append(
                 self.scheduler.call_later(
@@ -201,39 +201,29 @@ class SimulatedBehaviours(Node):
         goal.done = True
         for timer in goal.timers:
             timer.cancel()
-        self._goals.pop(bytes(goal.handle.goal_id.uuid), None)
-        goal.handle.execute(partial(self._result, goal, ending))
+        self._goals.pop(goal.served.key, None)
+        goal.served.finish(partial(self._decide, goal, ending))
 
-    def _result(self, goal: _Goal, ending: Ending | None, handle: Any) -> Any:
-        behaviour = goal.behaviour
-        action = self.interfaces.action(behaviour.action)
-        if ending is None or handle.is_cancel_requested:
-            handle.canceled()
+    def _decide(
+        self, goal: _Goal, ending: Ending | None, cancel_requested: bool
+    ) -> tuple[str | None, Any]:
+        """(outcome, answer) when the goal ends (outcome None: it is cancelled)."""
+        behaviour, served = goal.behaviour, goal.served
+        if ending is None or cancel_requested:
             self.started.append((behaviour.name, "preempted"))
-            return action.Result(outcome="preempted")
+            return None, served.cancelled()
         try:
             outcome = str(render(ending.outcome, goal.names))
             outputs = render(dict(ending.outputs), goal.names)
-            result = action.Result(outcome=outcome)
-            for output in behaviour.outputs:
-                value = outputs.get(output.name)
-                if not fits(output.type, value):  # the wrong type: a failing behaviour
-                    raise ValueError(f"output {output.name}: {value!r} is not a {output.type}")
-                if output.name in outputs:
-                    setattr(result, output.field, encode(output.type, value))
+            answer = served.answer(outcome, outputs)  # the wrong type: a failing behaviour
             for emission in ending.emit:
                 self.emit(emission, goal.names)
         except Exception as err:  # a failing script aborts the goal, not the server's node
             self._failed(f"{behaviour.name}: script failed: {err!r}")
-            handle.abort()
             self.started.append((behaviour.name, "aborted"))
-            return action.Result(outcome="aborted")
-        if outcome == "aborted":
-            handle.abort()
-        else:
-            handle.succeed()
+            return "aborted", served.failure()
         self.started.append((behaviour.name, outcome))
-        return result
+        return outcome, answer
 
     def _periodic(self, goal: _Goal, every: Periodic, delay: float) -> None:
         def tick() -> None:
@@ -250,11 +240,11 @@ class SimulatedBehaviours(Node):
 
         goal.timers.append(self.scheduler.call_later(delay * self.time_scale, tick))
 
-    def _on_cancel(self, handle: Any) -> CancelResponse:
-        goal = self._goals.get(bytes(handle.goal_id.uuid))
+    def _withdrawn(self, key: Any) -> None:
+        """A cancel request (or the state of a topic activation was left)."""
+        goal = self._goals.get(key)
         if goal is not None:  # after rclpy marked the goal as canceling
             self.scheduler.call_later(0.0, partial(self._finish, goal, None))
-        return CancelResponse.ACCEPT
 
     def _on_event(self, msg: Any) -> None:
         for goal in list(self._goals.values()):

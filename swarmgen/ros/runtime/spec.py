@@ -23,6 +23,30 @@ class Field:
 
 
 @dataclass(frozen=True, slots=True)
+class Binding:
+    """A behaviour bound to a declared ROS 2 interface (`bindings.py` runs it).
+
+    `type` is the ROS type triple (`geometry_msgs`, `msg`, `PoseStamped`); `kind` is `action`,
+    `service` or `topic` (with `direction` `publish` or `subscribe`). `inputs` map behaviour
+    inputs to field paths of the goal, request or message (`target_pose.pose.position.x`),
+    `outputs` field paths of the result, response or message to behaviour outputs. A non-empty
+    `outcome` names a field giving the outcome: a string naming it, or a bool (false: aborted).
+    `timeout_s` (None: the kind's default) is the default of the ROS parameter
+    `behaviours.<key>.timeout_s`.
+    """
+
+    kind: str
+    type: tuple[str, str, str]
+    ros_name: str  # relative to the member's namespace
+    inputs: tuple[tuple[str, str], ...] = ()  # (input, field path)
+    outputs: tuple[tuple[str, str], ...] = ()  # (field path, output)
+    outcome: str = ""
+    timeout_s: float | None = None
+    direction: str = ""  # topics only
+    key: str = ""  # the behaviour's parameter name (lower snake case); "" derives one
+
+
+@dataclass(frozen=True, slots=True)
 class BehaviourSpec:
     """A behaviour of the library as a ROS 2 action of the interface package."""
 
@@ -35,6 +59,8 @@ class BehaviourSpec:
     outcomes: tuple[str, ...] = ()
     # rosKind, rosName, rosType as the model declares them ("" when absent): metadata only
     declared: tuple[str, str, str] = ("", "", "")
+    # the declared interface it runs on; None: the action `action` of the interface package
+    binding: Binding | None = None
 
 
 @dataclass(frozen=True, slots=True)

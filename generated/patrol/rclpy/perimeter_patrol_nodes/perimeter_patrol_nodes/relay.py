@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ._ros.node import BehaviourSpec, Field, MemberSpec, Parameter, run_member
+from ._ros.node import BehaviourSpec, Binding, MemberSpec, Parameter, run_member
 from ._runtime.chart import Call, Chart, ChartBuilder, Context
 
 CHART_NAME = "Relay"
@@ -21,40 +21,62 @@ EVENT_SCOPES: dict[str, str] = {
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {"alarm": {"zone": 0, "level": 0}}
-# The behaviours this member runs: one ROS 2 action each, in the member's namespace.
+# The behaviours this member runs, in the member's namespace: on the interface the model
+# declares (binding=), else as an action of the interface package.
 BEHAVIOURS: dict[str, BehaviourSpec] = {
     "Land": BehaviourSpec(
         name="Land",
-        action="Land",
+        action="",
         ros_name="cmd/land",
         kind="HardwareFunction",
-        inputs=(),
-        outputs=(),
         outcomes=("succeeded", "aborted", "preempted"),
         declared=("service", "cmd/land", "std_srvs/srv/Empty"),
+        binding=Binding(
+            kind="service",
+            type=("std_srvs", "srv", "Empty"),
+            ros_name="cmd/land",
+            inputs=(),
+            outputs=(),
+            outcome="",
+            direction="",
+            key="land",
+        ),
     ),
     "RelayLink": BehaviourSpec(
         name="RelayLink",
-        action="RelayLink",
+        action="",
         ros_name="relay_link",
         kind="SwarmBehavior",
-        inputs=(
-            Field("altitude", "altitude", "float64"),
-            Field("focus_zone", "focus_zone", "int64"),
-        ),
-        outputs=(),
         outcomes=("succeeded", "aborted", "preempted"),
         declared=("action", "relay_link", "patrol_msgs/action/RelayLink"),
+        binding=Binding(
+            kind="action",
+            type=("patrol_msgs", "action", "RelayLink"),
+            ros_name="relay_link",
+            inputs=(("altitude", "altitude"), ("focus_zone", "focus_zone")),
+            outputs=(),
+            outcome="",
+            direction="",
+            key="relay_link",
+        ),
     ),
     "TakeOff": BehaviourSpec(
         name="TakeOff",
-        action="TakeOff",
+        action="",
         ros_name="cmd/takeoff",
         kind="HardwareFunction",
-        inputs=(Field("altitude", "altitude", "float64"),),
-        outputs=(),
         outcomes=("succeeded", "aborted", "preempted"),
         declared=("action", "cmd/takeoff", "cpswarm_msgs/action/Takeoff"),
+        binding=Binding(
+            kind="action",
+            type=("cpswarm_msgs", "action", "Takeoff"),
+            ros_name="cmd/takeoff",
+            inputs=(("altitude", "altitude"),),
+            outputs=(),
+            outcome="",
+            direction="",
+            key="take_off",
+        ),
     ),
 }
 # ROS parameters: member data defaults, hardware parameters, declared ROS bindings.
@@ -145,63 +167,63 @@ PARAMETERS: tuple[Parameter, ...] = (
         "string",
         "service",
         read_only=True,
-        description="declared by the model; run as action Land at cmd/land",
+        description="declared by the model; run as service std_srvs/srv/Empty at cmd/land",
     ),
     Parameter(
         "behaviours.land.ros_name",
         "string",
         "cmd/land",
         read_only=True,
-        description="declared by the model; run as action Land at cmd/land",
+        description="declared by the model; run as service std_srvs/srv/Empty at cmd/land",
     ),
     Parameter(
         "behaviours.land.ros_type",
         "string",
         "std_srvs/srv/Empty",
         read_only=True,
-        description="declared by the model; run as action Land at cmd/land",
+        description="declared by the model; run as service std_srvs/srv/Empty at cmd/land",
     ),
     Parameter(
         "behaviours.relay_link.ros_kind",
         "string",
         "action",
         read_only=True,
-        description="declared by the model; run as action RelayLink at relay_link",
+        description="declared by the model; run as action patrol_msgs/action/RelayLink at relay_link",
     ),
     Parameter(
         "behaviours.relay_link.ros_name",
         "string",
         "relay_link",
         read_only=True,
-        description="declared by the model; run as action RelayLink at relay_link",
+        description="declared by the model; run as action patrol_msgs/action/RelayLink at relay_link",
     ),
     Parameter(
         "behaviours.relay_link.ros_type",
         "string",
         "patrol_msgs/action/RelayLink",
         read_only=True,
-        description="declared by the model; run as action RelayLink at relay_link",
+        description="declared by the model; run as action patrol_msgs/action/RelayLink at relay_link",
     ),
     Parameter(
         "behaviours.take_off.ros_kind",
         "string",
         "action",
         read_only=True,
-        description="declared by the model; run as action TakeOff at cmd/takeoff",
+        description="declared by the model; run as action cpswarm_msgs/action/Takeoff at cmd/takeoff",
     ),
     Parameter(
         "behaviours.take_off.ros_name",
         "string",
         "cmd/takeoff",
         read_only=True,
-        description="declared by the model; run as action TakeOff at cmd/takeoff",
+        description="declared by the model; run as action cpswarm_msgs/action/Takeoff at cmd/takeoff",
     ),
     Parameter(
         "behaviours.take_off.ros_type",
         "string",
         "cpswarm_msgs/action/Takeoff",
         read_only=True,
-        description="declared by the model; run as action TakeOff at cmd/takeoff",
+        description="declared by the model; run as action cpswarm_msgs/action/Takeoff at cmd/takeoff",
     ),
 )
 

@@ -36,6 +36,7 @@ class _Compiler:
                 )
             container._check_outcomes()
         self.builder = ChartBuilder(name, data=dict(top.userdata._data), events=events)
+        self.builder.zeros(top.zeros)
         for entry in top._entries:
             self._emit(entry, None)
         self.builder.initial(None, self._initial_targets(top))

@@ -104,6 +104,8 @@ class Composite(State):
     ) -> None:
         super().__init__(outcomes, input_keys, output_keys, **options)
         self.userdata = UserData()
+        # the top container's data zeros where a value's kind does not say (ChartBuilder.zeros)
+        self.zeros: dict[str, Any] = {}
         self._entries: list[Entry] = []
         self._labels: dict[str, Entry] = {}
         self._initial: tuple[tuple[str, ...], Action | None] | None = None

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ._ros.node import BehaviourSpec, Field, MemberSpec, Parameter, run_member
+from ._ros.node import BehaviourSpec, Binding, MemberSpec, Parameter, run_member
 from ._runtime.chart import Call, Chart, ChartBuilder, Context
 
 CHART_NAME = "UGV"
@@ -18,43 +18,62 @@ EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "tar
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
     "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
 }
-# The behaviours this member runs: one ROS 2 action each, in the member's namespace.
+# The behaviours this member runs, in the member's namespace: on the interface the model
+# declares (binding=), else as an action of the interface package.
 BEHAVIOURS: dict[str, BehaviourSpec] = {
     "MoveTo": BehaviourSpec(
         name="MoveTo",
-        action="MoveTo",
+        action="",
         ros_name="cmd/moveto",
         kind="HardwareFunction",
-        inputs=(Field("target_pose", "target_pose", "json"),),
-        outputs=(),
         outcomes=("succeeded", "aborted", "preempted"),
         declared=("action", "cmd/moveto", "move_base_msgs/action/MoveBase"),
+        binding=Binding(
+            kind="action",
+            type=("move_base_msgs", "action", "MoveBase"),
+            ros_name="cmd/moveto",
+            inputs=(("target_pose", "target_pose"),),
+            outputs=(),
+            outcome="",
+            direction="",
+            key="move_to",
+        ),
     ),
     "Rescue": BehaviourSpec(
         name="Rescue",
-        action="Rescue",
+        action="",
         ros_name="ugv_rescue",
         kind="ComplexBehavior",
-        inputs=(
-            Field("target_id", "target_id", "int64"),
-            Field("target_pose", "target_pose", "json"),
-        ),
-        outputs=(),
         outcomes=("succeeded", "aborted", "preempted"),
         declared=("action", "ugv_rescue", "cpswarm_msgs/action/Target"),
+        binding=Binding(
+            kind="action",
+            type=("cpswarm_msgs", "action", "Target"),
+            ros_name="ugv_rescue",
+            inputs=(("target_id", "target_id"), ("target_pose", "target_pose")),
+            outputs=(),
+            outcome="",
+            direction="",
+            key="rescue",
+        ),
     ),
     "TaskBidding": BehaviourSpec(
         name="TaskBidding",
-        action="TaskBidding",
+        action="",
         ros_name="cmd/task_allocation_bid",
         kind="SwarmFunction",
-        inputs=(
-            Field("target_id", "target_id", "int64"),
-            Field("target_pose", "target_pose", "json"),
-        ),
-        outputs=(),
         outcomes=("succeeded", "aborted", "preempted"),
         declared=("action", "cmd/task_allocation_bid", "cpswarm_msgs/action/TaskAllocation"),
+        binding=Binding(
+            kind="action",
+            type=("cpswarm_msgs", "action", "TaskAllocation"),
+            ros_name="cmd/task_allocation_bid",
+            inputs=(("target_id", "target_id"), ("target_pose", "target_pose")),
+            outputs=(),
+            outcome="",
+            direction="",
+            key="task_bidding",
+        ),
     ),
 }
 # ROS parameters: member data defaults, hardware parameters, declared ROS bindings.
@@ -164,63 +183,63 @@ PARAMETERS: tuple[Parameter, ...] = (
         "string",
         "action",
         read_only=True,
-        description="declared by the model; run as action MoveTo at cmd/moveto",
+        description="declared by the model; run as action move_base_msgs/action/MoveBase at cmd/moveto",
     ),
     Parameter(
         "behaviours.move_to.ros_name",
         "string",
         "cmd/moveto",
         read_only=True,
-        description="declared by the model; run as action MoveTo at cmd/moveto",
+        description="declared by the model; run as action move_base_msgs/action/MoveBase at cmd/moveto",
     ),
     Parameter(
         "behaviours.move_to.ros_type",
         "string",
         "move_base_msgs/action/MoveBase",
         read_only=True,
-        description="declared by the model; run as action MoveTo at cmd/moveto",
+        description="declared by the model; run as action move_base_msgs/action/MoveBase at cmd/moveto",
     ),
     Parameter(
         "behaviours.rescue.ros_kind",
         "string",
         "action",
         read_only=True,
-        description="declared by the model; run as action Rescue at ugv_rescue",
+        description="declared by the model; run as action cpswarm_msgs/action/Target at ugv_rescue",
     ),
     Parameter(
         "behaviours.rescue.ros_name",
         "string",
         "ugv_rescue",
         read_only=True,
-        description="declared by the model; run as action Rescue at ugv_rescue",
+        description="declared by the model; run as action cpswarm_msgs/action/Target at ugv_rescue",
     ),
     Parameter(
         "behaviours.rescue.ros_type",
         "string",
         "cpswarm_msgs/action/Target",
         read_only=True,
-        description="declared by the model; run as action Rescue at ugv_rescue",
+        description="declared by the model; run as action cpswarm_msgs/action/Target at ugv_rescue",
     ),
     Parameter(
         "behaviours.task_bidding.ros_kind",
         "string",
         "action",
         read_only=True,
-        description="declared by the model; run as action TaskBidding at cmd/task_allocation_bid",
+        description="declared by the model; run as action cpswarm_msgs/action/TaskAllocation at cmd/task_allocation_bid",
     ),
     Parameter(
         "behaviours.task_bidding.ros_name",
         "string",
         "cmd/task_allocation_bid",
         read_only=True,
-        description="declared by the model; run as action TaskBidding at cmd/task_allocation_bid",
+        description="declared by the model; run as action cpswarm_msgs/action/TaskAllocation at cmd/task_allocation_bid",
     ),
     Parameter(
         "behaviours.task_bidding.ros_type",
         "string",
         "cpswarm_msgs/action/TaskAllocation",
         read_only=True,
-        description="declared by the model; run as action TaskBidding at cmd/task_allocation_bid",
+        description="declared by the model; run as action cpswarm_msgs/action/TaskAllocation at cmd/task_allocation_bid",
     ),
 )
 

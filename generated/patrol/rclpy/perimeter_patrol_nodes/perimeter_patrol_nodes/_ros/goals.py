@@ -8,7 +8,9 @@ tagged with the activation so that late results of cancelled goals are dropped.
 
 from __future__ import annotations
 
+import json
 import time
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,6 +24,9 @@ from .._runtime.chart import Call
 from .._runtime.chart import Node as ChartNode
 from .._runtime.engine import FINALIZE_PREFIX, Engine
 from .._runtime.engine import Event as SwarmEvent
+from .bindings import Resolved, assignments, outcome_of, outputs_of, resolve
+from .convert import ConversionError, build, plain
+from .declared import DeclaredCalls
 from .messages import Interfaces, decode, encode
 from .scheduler import Handle, Scheduler
 from .spec import BehaviourSpec
@@ -33,6 +38,7 @@ STATUS_OUTCOMES = {
     GoalStatus.STATUS_CANCELED: "preempted",
 }
 SERVER_RETRY_S = 0.05  # how often a goal waits for its action server to appear
+FEEDBACK_KEPT = 256  # feedback of declared actions kept for traces (the latest)
 
 
 @dataclass(eq=False)
@@ -71,10 +77,25 @@ class GoalClient(Node):
         self.pending_requests = 0  # goals sent, no answer yet
         self.pending_cancels = 0
         self._runs: dict[str, _Run] = {}
-        self.action_clients: dict[str, ActionClient[Any, Any, Any]] = {
-            name: ActionClient(self, interfaces.action(b.action), b.ros_name)
-            for name, b in sorted(behaviours.items())
+        # declared interfaces: checked and imported now (BindingError: the node cannot start)
+        self._declared: dict[str, Resolved] = {
+            name: resolve(b) for name, b in sorted(behaviours.items()) if b.binding is not None
         }
+        # (state, behaviour, feedback as plain values) of declared actions, for traces
+        self.feedback: deque[tuple[str, str, Any]] = deque(maxlen=FEEDBACK_KEPT)
+        self.action_clients: dict[str, ActionClient[Any, Any, Any]] = {}
+        for name, b in sorted(behaviours.items()):
+            item = self._declared.get(name)
+            if item is None:
+                self.action_clients[name] = ActionClient(
+                    self, interfaces.action(b.action), b.ros_name
+                )
+            elif item.binding.kind == "action":
+                self.action_clients[name] = ActionClient(self, item.type, item.binding.ros_name)
+        others = {n: r for n, r in self._declared.items() if r.binding.kind != "action"}
+        self.declared_calls = DeclaredCalls(
+            self, self.scheduler, others, self._finish_declared, self.errors
+        )
 
     def deliver(self, event: SwarmEvent) -> None:
         """Queue an event for the engine (the member node's)."""
@@ -82,7 +103,8 @@ class GoalClient(Node):
 
     def servers_ready(self) -> bool:
         """Every behaviour's action server is up."""
-        return all(client.server_is_ready() for client in self.action_clients.values())
+        clients = self.action_clients.values()
+        return all(c.server_is_ready() for c in clients) and self.declared_calls.ready()
 
     def running_goal(self, state: str) -> Any:
         """The goal handle of the behaviour a state runs now (None if none is running)."""
@@ -103,12 +125,14 @@ class GoalClient(Node):
             self.pending_requests == 0
             and self.pending_cancels == 0
             and all(run.handle is not None or run.finished for run in self._runs.values())
+            and self.declared_calls.idle()
         )
 
     def _cancel_runs(self) -> None:
         for run in list(self._runs.values()):
             self._cancel(run)
         self._runs.clear()
+        self.declared_calls.cancel_all()
 
     def start_call(
         self, node: ChartNode, call: Call, args: dict[str, Any], activation: int
@@ -118,17 +142,56 @@ class GoalClient(Node):
         if behaviour is None:
             self.errors.append(f"no action for behaviour {call.behaviour}")
             return
-        goal_type = self.interfaces.action(behaviour.action).Goal
-        goal = goal_type(**{f.field: encode(f.type, args.get(f.name)) for f in behaviour.inputs})
+        if self.declared_calls.handles(behaviour.name):
+            self.declared_calls.start(node, behaviour.name, args, activation)
+            return
+        item = self._declared.get(behaviour.name)
+        if item is None:
+            goal_type = self.interfaces.action(behaviour.action).Goal
+            goal = goal_type(
+                **{f.field: encode(f.type, args.get(f.name)) for f in behaviour.inputs}
+            )
+        else:
+            try:
+                goal = build(item.request, assignments(item, args), behaviour.name)
+            except ConversionError as err:
+                self._abort_later(node, activation, behaviour, f"cannot send {item.label}: {err}")
+                return
         run = _Run(node, activation, behaviour, goal)
         self._runs[node.id] = run
         self._send_goal(run)
+
+    def _abort_later(
+        self, node: ChartNode, activation: int, behaviour: BehaviourSpec, reason: str
+    ) -> None:
+        """The behaviour cannot start: it ends `aborted` from the executor (not inside the
+        engine's step), with the reason logged and kept as a member error."""
+        text = f"behaviour {behaviour.name} in {node.id}: {reason}"
+        self.errors.append(text)
+        self.get_logger().error(text)
+        self.scheduler.call_later(
+            0.0, lambda: self._finish_declared(node, activation, behaviour.name, "aborted", {})
+        )
+
+    def _finish_declared(
+        self,
+        node: ChartNode,
+        activation: int,
+        behaviour: str,
+        outcome: str,
+        outputs: dict[str, Any],
+    ) -> None:
+        run = _Run(node, activation, self._behaviours[behaviour], None)
+        if self._undeclared(run, outcome):
+            outcome, outputs = "aborted", {}
+        self._outcome(run, outcome, outputs)
 
     def cancel_call(self, node: ChartNode, activation: int) -> None:
         """The state was left: cancel its goal (the engine's host interface)."""
         run = self._runs.pop(node.id, None)
         if run is not None:
             self._cancel(run)
+        self.declared_calls.cancel(node.id)
 
     def _send_goal(self, run: _Run) -> None:
         run.retry = None
@@ -145,11 +208,18 @@ class GoalClient(Node):
             run.retry = self.scheduler.call_later(SERVER_RETRY_S, lambda: self._send_goal(run))
             return
         self.pending_requests += 1
-        future = client.send_goal_async(run.goal, feedback_callback=self._on_feedback)
+        future = client.send_goal_async(
+            run.goal, feedback_callback=lambda feedback: self._on_feedback(run, feedback)
+        )
         future.add_done_callback(lambda f: self._on_goal_response(run, f))
 
-    def _on_feedback(self, feedback: Any) -> None:
-        self.get_logger().debug(f"feedback: {feedback.feedback.status}")
+    def _on_feedback(self, run: _Run, feedback: Any) -> None:
+        if run.behaviour.name not in self._declared:
+            self.get_logger().debug(f"feedback: {feedback.feedback.status}")
+            return
+        values = plain(feedback.feedback)
+        self.feedback.append((run.node.id, run.behaviour.name, values))
+        self.get_logger().debug(f"feedback of {run.behaviour.name}: {json.dumps(values)}")
 
     def _on_goal_response(self, run: _Run, future: Future[Any]) -> None:
         self.pending_requests -= 1
@@ -179,14 +249,14 @@ class GoalClient(Node):
             self._outcome(run, "aborted", {})
             return
         result = response.result
-        outcome = result.outcome or STATUS_OUTCOMES.get(response.status, "aborted")
-        declared = run.behaviour.outcomes
-        if self._check_outcomes and declared and outcome not in declared:
-            self.errors.append(
-                f"behaviour {run.behaviour.name} in {run.node.id} failed: "
-                f"returned the undeclared outcome {outcome[:80]!r}"
-            )
+        status = STATUS_OUTCOMES.get(response.status, "aborted")
+        item = self._declared.get(run.behaviour.name)
+        outcome = outcome_of(item, result, status) if item else (result.outcome or status)
+        if self._undeclared(run, outcome):
             self._outcome(run, "aborted", {})
+            return
+        if item is not None:
+            self._outcome(run, outcome, outputs_of(item, result))
             return
         outputs: dict[str, Any] = {}
         for output in run.behaviour.outputs:
@@ -194,6 +264,17 @@ class GoalClient(Node):
             if present:
                 outputs[output.name] = value
         self._outcome(run, outcome, outputs)
+
+    def _undeclared(self, run: _Run, outcome: str) -> bool:
+        """The behaviour does not declare `outcome` (a member error: it ends `aborted`)."""
+        declared = run.behaviour.outcomes
+        if self._check_outcomes and declared and outcome not in declared:
+            self.errors.append(
+                f"behaviour {run.behaviour.name} in {run.node.id} failed: "
+                f"returned the undeclared outcome {outcome[:80]!r}"
+            )
+            return True
+        return False
 
     def _outcome(self, run: _Run, outcome: str, outputs: Mapping[str, Any]) -> None:
         if self._runs.get(run.node.id) is run:

@@ -1,0 +1,238 @@
+"""Behaviours bound to declared services and topics (actions run in `goals.GoalClient`).
+
+- service: entering the state sends the request (inputs by field path) once the service is
+  there; the response gives the outputs and the outcome `succeeded`, or `aborted` when its
+  outcome field (`bool success`) is false, the call raised, or no response came within the
+  timeout (ROS parameter `behaviours.<key>.timeout_s`, counted from the state's entry, so it
+  covers a service that never appears; 0: no limit). Leaving the state drops the call.
+- topic, `publish`: the inputs as one message, published as soon as the topic has a
+  subscriber or the timeout passed (a topic has no answer: a message published before any
+  subscriber matched is lost), then `succeeded`.
+- topic, `subscribe`: the behaviour ends `succeeded` (or by its outcome field) when a message
+  arrives on the topic after the state's entry, with the message's fields as outputs; with a
+  timeout > 0 it ends `aborted` when none came in time.
+Outcomes are delivered from the executor (scheduler), never from inside the engine's step.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rclpy.task import Future
+
+from ...runtime.chart import Node as ChartNode
+from .bindings import DEFAULT_TIMEOUTS, Resolved, assignments, outcome_of, outputs_of
+from .convert import ConversionError, build
+from .scheduler import Handle, Scheduler
+
+RETRY_S = 0.05  # how often a call waits for its service, or a message for its subscriber
+TOPIC_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+# (state, activation, behaviour name, outcome, outputs)
+Finish = Callable[[ChartNode, int, str, str, dict[str, Any]], None]
+
+
+@dataclass(eq=False)
+class _Call:
+    """One activation of a declared service or topic behaviour."""
+
+    node: ChartNode
+    activation: int
+    resolved: Resolved
+    message: Any = None  # the request, or the message to publish
+    future: Future[Any] | None = None
+    retry: Handle | None = None
+    deadline: Handle | None = None
+    done: bool = False
+    number: int = 0  # the node's calls, from 1 (replay tells activations apart by it)
+    request: int = 0  # the behaviour's service requests, from 1 in the order sent
+
+
+class DeclaredCalls:
+    """The service and topic behaviours of one member node."""
+
+    def __init__(
+        self,
+        node: Node,
+        scheduler: Scheduler,
+        resolved: Mapping[str, Resolved],
+        finish: Finish,
+        errors: list[str],
+    ) -> None:
+        self._node = node
+        self._scheduler = scheduler
+        self._finish = finish
+        self._errors = errors
+        self._resolved = dict(resolved)
+        self._calls: dict[str, _Call] = {}  # state id -> call
+        self._endpoints: dict[str, Any] = {}
+        self.timeouts: dict[str, float] = {}
+        self._numbers = itertools.count(1)
+        self._requests: dict[str, int] = {}
+        # (behaviour, request) -> its server holds the request: the call counts as idle (replay)
+        self.held: Callable[[str, int], bool] = lambda _behaviour, _request: False
+        for name, item in sorted(self._resolved.items()):
+            self._endpoints[name] = self._endpoint(name, item)
+            default = item.binding.timeout_s
+            if default is None:
+                default = DEFAULT_TIMEOUTS[_mode(item)]
+            declared: Any = node.declare_parameter(item.parameter, float(default)).value
+            self.timeouts[name] = max(0.0, float(declared))
+
+    def _endpoint(self, name: str, item: Resolved) -> Any:
+        ros_name = item.binding.ros_name
+        mode = _mode(item)
+        if mode == "service":
+            return self._node.create_client(item.type, ros_name)
+        if mode == "publish":
+            return self._node.create_publisher(item.type, ros_name, TOPIC_QOS)
+        return self._node.create_subscription(
+            item.type, ros_name, lambda message: self._on_message(name, message), TOPIC_QOS
+        )
+
+    def handles(self, behaviour: str) -> bool:
+        """The behaviour is a declared service or topic."""
+        return behaviour in self._resolved
+
+    def ready(self) -> bool:
+        """Every declared service is up (topics need nothing)."""
+        return all(
+            self._endpoints[name].service_is_ready()
+            for name, item in self._resolved.items()
+            if _mode(item) == "service"
+        )
+
+    def idle(self) -> bool:
+        """No call is on its way (a subscriber waiting for its message is idle, and so is a
+        request its server holds by `held`: the replay driver's)."""
+        return all(
+            c.done
+            or _mode(c.resolved) == "subscribe"
+            or (c.request > 0 and self.held(c.resolved.behaviour.name, c.request))
+            for c in self._calls.values()
+        )
+
+    def running(self, state: str) -> tuple[int, int] | None:
+        """(number, request) of the call a state has on its way (request 0: none sent)."""
+        call = self._calls.get(state)
+        return (call.number, call.request) if call is not None and not call.done else None
+
+    def start(
+        self, node: ChartNode, behaviour: str, args: Mapping[str, Any], activation: int
+    ) -> None:
+        """A state running the behaviour was entered."""
+        item = self._resolved[behaviour]
+        call = _Call(node, activation, item, number=next(self._numbers))
+        self.cancel(node.id)
+        self._calls[node.id] = call
+        mode = _mode(item)
+        if mode != "subscribe":
+            try:
+                call.message = build(item.request, assignments(item, args), behaviour)
+            except ConversionError as err:
+                self._fail(call, f"cannot send {item.label}: {err}", error=True)
+                return
+        timeout = self.timeouts[behaviour]
+        if timeout > 0 and mode != "publish":
+            call.deadline = self._scheduler.call_later(timeout, lambda: self._timed_out(call))
+        if mode == "service":
+            self._call_service(call)
+        elif mode == "publish":
+            self._publish(call, timeout)
+
+    def cancel(self, state: str) -> None:
+        """The state was left: its call is dropped (a late answer is ignored)."""
+        call = self._calls.pop(state, None)
+        if call is not None:
+            self._close(call)
+
+    def cancel_all(self) -> None:
+        """Drop every call."""
+        for state in list(self._calls):
+            self.cancel(state)
+
+    def _close(self, call: _Call) -> None:
+        call.done = True
+        for handle in (call.retry, call.deadline):
+            if handle is not None:
+                handle.cancel()
+        if call.future is not None and not call.future.done():
+            self._endpoints[call.resolved.behaviour.name].remove_pending_request(call.future)
+
+    def _end(self, call: _Call, outcome: str, outputs: dict[str, Any]) -> None:
+        if call.done:
+            return
+        self._close(call)
+        if self._calls.get(call.node.id) is call:
+            del self._calls[call.node.id]
+        self._finish(call.node, call.activation, call.resolved.behaviour.name, outcome, outputs)
+
+    def _fail(self, call: _Call, reason: str, *, error: bool) -> None:
+        """End `aborted` from the executor, logging why (`error`: also a member error)."""
+        text = f"behaviour {call.resolved.behaviour.name} in {call.node.id}: {reason}"
+        if error:
+            self._errors.append(text)
+            self._node.get_logger().error(text)
+        else:
+            self._node.get_logger().warning(text)
+        self._scheduler.call_later(0.0, lambda: self._end(call, "aborted", {}))
+
+    def _call_service(self, call: _Call) -> None:
+        call.retry = None
+        if call.done:
+            return
+        client = self._endpoints[call.resolved.behaviour.name]
+        if not client.service_is_ready():
+            call.retry = self._scheduler.call_later(RETRY_S, lambda: self._call_service(call))
+            return
+        call.future = client.call_async(call.message)
+        name = call.resolved.behaviour.name
+        call.request = self._requests[name] = self._requests.get(name, 0) + 1
+        call.future.add_done_callback(lambda future: self._on_response(call, future))
+
+    def _on_response(self, call: _Call, future: Future[Any]) -> None:
+        if call.done:
+            return
+        error = future.exception()
+        if error is not None or future.result() is None:
+            self._fail(call, f"service call failed: {error!r}", error=True)
+            return
+        response = future.result()
+        outcome = outcome_of(call.resolved, response, "succeeded")
+        self._end(call, outcome, outputs_of(call.resolved, response))
+
+    def _timed_out(self, call: _Call) -> None:
+        if call.done:
+            return
+        limit = self.timeouts[call.resolved.behaviour.name]
+        what = "no message" if _mode(call.resolved) == "subscribe" else "no response"
+        self._fail(call, f"{what} from {call.resolved.binding.ros_name!r} within {limit:g} s",
+                   error=False)  # fmt: skip
+
+    def _publish(self, call: _Call, timeout: float, waited: float = 0.0) -> None:
+        call.retry = None
+        if call.done:
+            return
+        publisher = self._endpoints[call.resolved.behaviour.name]
+        if publisher.get_subscription_count() == 0 and waited < timeout:
+            call.retry = self._scheduler.call_later(
+                RETRY_S, lambda: self._publish(call, timeout, waited + RETRY_S)
+            )
+            return
+        publisher.publish(call.message)
+        self._scheduler.call_later(0.0, lambda: self._end(call, "succeeded", {}))
+
+    def _on_message(self, behaviour: str, message: Any) -> None:
+        waiting = [c for c in self._calls.values() if c.resolved.behaviour.name == behaviour]
+        for call in waiting:
+            outcome = outcome_of(call.resolved, message, "succeeded")
+            self._end(call, outcome, outputs_of(call.resolved, message))
+
+
+def _mode(item: Resolved) -> str:
+    """`service`, `publish` or `subscribe` (actions do not come here)."""
+    return item.binding.kind if item.binding.kind == "service" else item.binding.direction
