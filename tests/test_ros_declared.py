@@ -25,13 +25,14 @@ pytest.importorskip("rclpy", reason="rclpy comes with the `ros` extra: run `make
 from geometry_msgs.msg import Polygon, PoseStamped, PoseWithCovariance
 from std_msgs.msg import Byte, Float32, UInt8
 
-from swarmgen.ros.runtime.bindings import BindingError, resolve
+from swarmgen.ros.runtime.bindings import BindingError, assignments, outputs_of, resolve
 from swarmgen.ros.runtime.convert import (
     ConversionError,
     build,
     check_path,
     get_path,
     plain,
+    renamed,
     to_message,
 )
 from swarmgen.ros.runtime.spec import BehaviourSpec, Binding
@@ -115,6 +116,33 @@ def test_unknown_fields_and_paths() -> None:
         check_path(PoseStamped, "header.frame_id.x")
     with pytest.raises(ConversionError, match="has no field 'nope'"):
         to_message(PoseStamped, {"nope": 1})
+
+
+def test_whole_message_paths_and_key_renames() -> None:
+    """The empty path (`idl_bind.WHOLE`) is the whole message both ways; data type keys the
+    binding renames (`posX` -> `x`, nested under `position`) go renamed and come back."""
+    spot = (("posX", "x", ()), ("posY", "y", ()))
+    renames = (("input", "where", (("place", "position", spot),)), ("output", "seen", spot))
+    binding = Binding(
+        "topic", ("geometry_msgs", "msg", "Pose"), "pose", inputs=(("where", ""),),
+        direction="publish", renames=renames,
+    )  # fmt: skip
+    resolved = resolve(BehaviourSpec("Put", "", "pose", "HardwareFunction", binding=binding))
+    pairs = assignments(resolved, {"where": {"place": {"posX": 1.5, "posY": -2, "z": 3}}})
+    assert pairs == [("", {"position": {"x": 1.5, "y": -2, "z": 3}})]
+    message = build(resolved.request, [*pairs, ("orientation.w", 0.5)], "message")
+    assert (message.position.x, message.position.y, message.position.z) == (1.5, -2.0, 3.0)
+    assert message.orientation.w == 0.5  # a path inside is set after the whole message
+    assert check_path(resolved.request, "") == []
+    assert get_path(message, "")["position"] == {"x": 1.5, "y": -2.0, "z": 3.0}
+    listen = Binding(
+        "topic", ("geometry_msgs", "msg", "Point"), "p", outputs=(("", "seen"),),
+        direction="subscribe", renames=renames,
+    )  # fmt: skip
+    heard = resolve(BehaviourSpec("Hear", "", "p", "HardwareFunction", binding=listen))
+    point = build(heard.answer, [("", {"x": 1.0, "y": 2.0})], "message")
+    assert outputs_of(heard, point) == {"seen": {"posX": 1.0, "posY": 2.0, "z": 0.0}}
+    assert renamed([{"posX": 1}], spot, True) == [{"x": 1}]  # a sequence, item by item
 
 
 @pytest.mark.parametrize(

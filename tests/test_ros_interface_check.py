@@ -6,12 +6,13 @@ from __future__ import annotations
 import re
 import subprocess
 import sys
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any
 
 import pytest
 
 from swarmgen import pipeline
+from swarmgen.backends.rclpy_declared import declared_bindings, user_packages
 from swarmgen.ros.idl_bind import WHOLE, bind
 from swarmgen.ros.idl_index import BUNDLED, InterfaceIndex, Root
 from tests.modelkit import ModelKit
@@ -34,6 +35,7 @@ def _model(
     kit.datatypes["Vec"] = {"x": "Real", "y": "Real", "z": "Real"}  # geometry_msgs/msg/Point
     kit.datatypes["Flat"] = {"x": "Real", "w": "Real"}  # no message has these fields
     kit.datatypes["Goal"] = {"altitude": "Real", "zone": "Integer"}  # p/action/Go_Goal
+    kit.datatypes["Spot"] = {"posX": "Real", "posY": "Real"}  # p/msg/Spot: pos_x, pos_y
     kit.enumeration("Mode", "search", "track")
     kit.behaviour("Go", inputs=inputs or {}, outputs=outputs or {})
     kit.event("launch", sender="station")
@@ -260,3 +262,69 @@ def test_binding_of_sequences_enums_and_whole_messages(tmp_path: Path) -> None:
     assert arrays is not None and arrays.inputs == (("route", "route"), ("mode", "mode"))
     whole = binding(_model(tmp_path / "b", POINT_TOPIC, {}, {"p": "Vec"}, {}, VEC))
     assert whole is not None and whole.outputs == ((WHOLE, "p"),) and whole.direction == "subscribe"
+
+
+SPOT_FILES = {
+    "p/msg/Spot.msg": "float64 pos_x\nfloat64 pos_y\n",
+    "p/action/Go.action": "p/Spot target\n---\nstring outcome\np/Spot reached\n---\n",
+}
+
+
+def _index(path: Path) -> InterfaceIndex:
+    return InterfaceIndex([Root(path.parent / "interfaces", "user"), Root(BUNDLED, "bundled")])
+
+
+def test_renamed_keys_bind_and_the_backend_decides_as_the_check(tmp_path: Path) -> None:
+    """`posX` maps to `pos_x` (ros_name): no diagnostic, a binding with the renames, and the
+    rclpy backend binds exactly the behaviours the check passes."""
+    cases = [
+        ({"target": "Spot"}, {"reached": "Spot"}, SPOT_FILES, True),
+        ({"target": "Flat"}, {}, SPOT_FILES, False),  # SG306/SG307: no such fields
+        ({"altitude": "Real"}, {}, {}, False),  # SG301: the private fallback
+    ]
+    for number, (inputs, outputs, files, binds) in enumerate(cases):
+        path = _model(tmp_path / str(number), ACTION, inputs, outputs, files)
+        model = pipeline.validate(path).model
+        assert model is not None
+        assert (_codes(path) == []) is binds, (inputs, _codes(path))
+        found = declared_bindings(model, ["Go"], _index(path), ())
+        assert ("Go" in found) is binds, inputs
+    path = tmp_path / "0" / "model.xmi"
+    model = pipeline.validate(path).model
+    assert model is not None
+    binding = bind(model.behaviours[0], _index(path), model.datatypes, model.enumerations)
+    assert binding is not None
+    spot = (("posX", "pos_x", ()), ("posY", "pos_y", ()))
+    assert binding.renames == (("input", "target", spot), ("output", "reached", spot))
+    literal = declared_bindings(model, ["Go"], _index(path), ())["Go"].literal("go")
+    assert "renames=(('input', 'target', (('posX', 'pos_x', ())" in literal, literal
+
+
+def test_user_definition_changed_after_the_check_is_no_error(tmp_path: Path) -> None:
+    """The workspace copies the text the check read: a file edited, then removed, after the
+    check gives the checked text, never an exception (exit 3)."""
+    path = _model(tmp_path, ACTION, {"target": "Spot"}, {}, SPOT_FILES)
+    model = pipeline.validate(path).model
+    assert model is not None
+    index = _index(path)
+    declared = declared_bindings(model, ["Go"], index, ())
+    assert "Go" in declared
+    spot = tmp_path / "interfaces" / "p" / "msg" / "Spot.msg"
+    spot.write_bytes(b"\xff\xfe not text")
+    files = user_packages(declared.values(), index)["p"]
+    assert files[PurePosixPath("msg/Spot.msg")] == SPOT_FILES["p/msg/Spot.msg"]
+    spot.unlink()
+    files = user_packages(declared.values(), index)["p"]
+    assert files[PurePosixPath("msg/Spot.msg")] == SPOT_FILES["p/msg/Spot.msg"]
+
+
+def test_shadowed_definition_warns_and_an_equal_one_does_not(tmp_path: Path) -> None:
+    """SG309: the same type defined otherwise in a later directory (`--interfaces` first,
+    then `interfaces/` beside the model); an equal text (but for line ends) is no warning."""
+    for other, codes in ((GO + "int8 extra\n", ["SG309"]), (GO.replace("\n", "\r\n"), [])):
+        path = _model(tmp_path / str(len(codes)), ACTION, {}, {}, {"p/action/Go.action": GO})
+        first = path.parent / "first"
+        (first / "p" / "action").mkdir(parents=True)
+        (first / "p" / "action" / "Go.action").write_text(other, newline="")
+        found = pipeline.validate(path, [first]).diagnostics
+        assert [d.code.id for d in found if d.code.id.startswith("SG3")] == codes

@@ -4,24 +4,23 @@ used), the `Binding(...)` literal of their spec, and the interface packages the 
 build for types found only in the user's interface directories (docs/ros2.md, "The rclpy
 backend on declared interfaces").
 
-A behaviour binds when `idl_bind.bind` gives a binding (every input and output maps to a field
-of a converting type) and its data type values can travel as they are (every field name of a
-data type it carries is already the ROS field name: the runtime passes the dicts unchanged).
+A behaviour binds exactly when `idl_bind.bind` gives a binding, the decision the check reports
+on (every input and output maps to a field of a converting type); data type keys that are not
+ROS field names (`posX`) travel renamed (`Binding.renames`, applied by the runtime both ways).
 Anything else keeps the generated private action, as before.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass
-from pathlib import Path, PurePosixPath
+from pathlib import PurePosixPath
 
-from swarmgen.inputs import InputRefused, read_limited
-from swarmgen.ir.nodes import Behaviour, DataType, Model
+from swarmgen.ir.nodes import Behaviour, Model
 from swarmgen.names import one_line, ros_name
 from swarmgen.ros.idl import InterfaceDef
-from swarmgen.ros.idl_bind import Binding, bind
-from swarmgen.ros.idl_index import MAX_FILE, InterfaceIndex
+from swarmgen.ros.idl_bind import Binding, Renames, bind
+from swarmgen.ros.idl_index import InterfaceIndex
 from swarmgen.ros.interfaces import render_user_package
 
 # The parameter the runtime declares per service and topic binding (`bindings.resolve`).
@@ -36,6 +35,7 @@ class Declared:
     key: str  # `behaviours.<key>.*` (ros_name of the behaviour's name)
     inputs: tuple[tuple[str, str], ...]  # (input identifier, field path)
     outputs: tuple[tuple[str, str], ...]  # (field path, output identifier)
+    renames: tuple[tuple[str, str, Renames], ...] = ()  # (input|output, identifier, renames)
 
     @property
     def triple(self) -> tuple[str, str, str]:
@@ -49,7 +49,8 @@ class Declared:
         return (
             f"Binding(kind={b.kind!r}, type={self.triple!r}, ros_name={ros_name_!r}, "
             f"inputs={self.inputs!r}, outputs={self.outputs!r}, "
-            f"outcome={b.outcome_field or ''!r}, direction={direction!r}, key={self.key!r})"
+            f"outcome={b.outcome_field or ''!r}, direction={direction!r}, key={self.key!r}"
+            f"{f', renames={self.renames!r}' if self.renames else ''})"
         )
 
     @property
@@ -69,7 +70,6 @@ def declared_bindings(
     if index is None:
         return {}
     behaviours = {b.name: b for b in model.behaviours}
-    datatypes = {d.name: d for d in model.datatypes}
     taken = set(reserved)
     found: dict[str, Declared] = {}
     for name in names:
@@ -78,10 +78,6 @@ def declared_bindings(
             continue
         binding = bind(behaviour, index, model.datatypes, model.enumerations)
         if binding is None or binding.package in taken:
-            continue
-        if not all(
-            _travels(p.type, datatypes, ()) for p in (*behaviour.inputs, *behaviour.outputs)
-        ):
             continue
         found[name] = _declared(behaviour, binding)
     return found
@@ -94,20 +90,7 @@ def _declared(behaviour: Behaviour, binding: Binding) -> Declared:
         ros_name(behaviour.name),
         tuple((idents[name], path) for name, path in binding.inputs),
         tuple((path, idents[name]) for path, name in binding.outputs),
-    )
-
-
-def _travels(
-    type_name: str | None, datatypes: Mapping[str, DataType], seen: tuple[str, ...]
-) -> bool:
-    """A value of `type_name` reaches the message as it is: a data type's field names (its
-    dict keys at run time) are the ROS field names, recursively."""
-    datatype = datatypes.get((type_name or "").strip())
-    if datatype is None or datatype.name in seen:
-        return True
-    return all(
-        f.name == ros_name(f.name) and _travels(f.type, datatypes, (*seen, datatype.name))
-        for f in datatype.fields
+        tuple((side, idents[name], tree) for side, name, tree in binding.renames),
     )
 
 
@@ -126,21 +109,11 @@ def user_definitions(
     return {package: dict(sorted(found[package].items())) for package in sorted(found)}
 
 
-def _user_file(definition: InterfaceDef, index: InterfaceIndex) -> Path | None:
-    relative = Path(definition.package, definition.kind, f"{definition.name}.{definition.kind}")
-    for root in index.roots:
-        if root.origin == "user" and (root.path / relative).is_file():
-            return root.path / relative
-    return None
-
-
 def _in_user_root(definition: InterfaceDef, index: InterfaceIndex) -> bool:
-    path = _user_file(definition, index)
-    if path is None:
-        return False
+    """Whether a user directory defines it, as the index read it for the check (no new look
+    at the disk): the first definition is the user's, or an installed one with its text."""
     loaded = index.load(definition.package, definition.kind, definition.name)
-    # the first definition is the user's, or an installed one with the same text (SG309 else)
-    return loaded.origin == "user" or str(path) not in loaded.differs
+    return loaded.origin == "user" or loaded.user_copy
 
 
 def user_packages(
@@ -163,13 +136,9 @@ def user_packages(
 
 
 def _text(definition: InterfaceDef, index: InterfaceIndex) -> str:
-    """The user's file as it is (it was read and parsed already: size and encoding hold)."""
-    path = _user_file(definition, index)
-    assert path is not None
-    try:
-        return read_limited(path, MAX_FILE).decode("utf-8")
-    except (InputRefused, OSError, UnicodeDecodeError) as err:  # changed since it was checked
-        raise ValueError(f"{path}: cannot read the definition again: {err}") from None
+    """The definition's text as the index read it for the check (memoised there): a file that
+    changed or vanished since then cannot make the workspace differ from what was checked."""
+    return index.load(definition.package, definition.kind, definition.name).text
 
 
 def exec_depends(declared: Iterable[Declared], own: Iterable[str]) -> list[str]:

@@ -53,6 +53,8 @@ _SECTION_SUFFIX = {
     "request": "_Request", "response": "_Response", "message": "",
 }  # fmt: skip
 WHOLE = ""  # the field path of a parameter that is the whole goal, request or message
+# Key renames of a data type's values: (model key, ROS field name, renames inside that field).
+Renames = tuple[tuple[str, str, "Renames"], ...]
 MAX_QUOTE = 8  # definition lines quoted in one note
 
 
@@ -69,6 +71,9 @@ class Binding:
     outputs: tuple[tuple[str, str], ...]  # (field path, behaviour output)
     outcome_field: str | None  # result `string outcome` (action), response `bool success` (srv)
     definitions: Mapping[str, InterfaceDef] = field(default_factory=dict)
+    # (input|output, behaviour parameter, renames) for data type values whose keys are not
+    # already the ROS field names (`posX` -> `pos_x`); the runtime renames them both ways
+    renames: tuple[tuple[str, str, Renames], ...] = ()
 
     @property
     def type(self) -> str:
@@ -188,7 +193,23 @@ class _Mapper:
             ),
             outcome,
             dict(self.definitions),
+            self._renames(behaviour, inputs, outputs),
         )
+
+    def _renames(
+        self, behaviour: Behaviour, inputs: list[str | None], outputs: list[str | None]
+    ) -> tuple[tuple[str, str, Renames], ...]:
+        """The key renames of every mapped parameter that has some."""
+        found: list[tuple[str, str, Renames]] = []
+        for side, params, paths in (
+            ("input", behaviour.inputs, inputs),
+            ("output", behaviour.outputs, outputs),
+        ):
+            for param, path in zip(params, paths, strict=True):
+                tree = renames_of(param.type, self.datatypes, ())
+                if path is not None and tree:
+                    found.append((side, param.name, tree))
+        return tuple(found)
 
     def _whole(self, param: Property, section: Section) -> bool:
         """Whether `param` is a «RosMessage» data type of exactly this section's type (the
@@ -294,6 +315,22 @@ class _Mapper:
             if reason is not None:
                 return "shape", f"{datatype.name}.{sub.name}: {reason[1]}"
         return None
+
+
+def renames_of(
+    type_name: str | None, datatypes: Mapping[str, DataType], seen: tuple[str, ...]
+) -> Renames:
+    """The key renames of a value of `type_name` (a data type's field names through
+    `ros_name`, the rule the mapping checks with), recursively; () when none differ."""
+    datatype = datatypes.get((type_name or "").strip())
+    if datatype is None or datatype.name in seen:
+        return ()
+    found: list[tuple[str, str, Renames]] = []
+    for sub in datatype.fields:
+        inner = renames_of(sub.type, datatypes, (*seen, datatype.name))
+        if inner or sub.name != ros_name(sub.name):
+            found.append((sub.name, ros_name(sub.name), inner))
+    return tuple(found)
 
 
 def _outcome_field(root: InterfaceDef) -> str | None:

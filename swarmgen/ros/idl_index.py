@@ -42,6 +42,8 @@ class Loaded:
     definition: InterfaceDef | IdlError | None  # None: found nowhere
     origin: Origin | None = None
     differs: tuple[str, ...] = ()  # later definitions with another text
+    text: str = ""  # the definition's text as read (what a generated interface package copies)
+    user_copy: bool = False  # a later user directory has the same text (it is built there)
 
 
 @dataclass(frozen=True)
@@ -121,7 +123,10 @@ class InterfaceIndex:
         root, path, content = found[0]
         definition = _parse(content, package, kind, name, path)
         differs = tuple(str(p) for _, p, other in found[1:] if _normal(other) != _normal(content))
-        return Loaded(definition, root.origin, differs)
+        parsed = isinstance(content, bytes) and not isinstance(definition, IdlError)
+        text = content.decode("utf-8") if parsed and isinstance(content, bytes) else ""
+        copy = any(r.origin == "user" and _normal(o) == _normal(content) for r, _, o in found[1:])
+        return Loaded(definition, root.origin, differs, text, copy)
 
     def resolve(self, package: str, kind: Kind, name: str) -> Resolution:
         """`package/kind/name` with every nested message, depth first (memoised)."""

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from .convert import ConversionError, check_path, get_path
+from .convert import ConversionError, check_path, get_path, renamed
 from .spec import BehaviourSpec, Binding
 
 # rosidl's patterns (as swarmgen.ros.idl_names, which the vendored runtime cannot import).
@@ -112,8 +112,17 @@ def _snake(name: str) -> str:
 
 
 def outputs_of(resolved: Resolved, answer: Any) -> dict[str, Any]:
-    """The behaviour's outputs read from a result, response or message."""
-    return {output: get_path(answer, path) for path, output in resolved.binding.outputs}
+    """The behaviour's outputs read from a result, response or message (data type keys
+    renamed back to the model's names)."""
+    return {
+        output: renamed(get_path(answer, path), renames(resolved, "output", output), False)
+        for path, output in resolved.binding.outputs
+    }
+
+
+def renames(resolved: Resolved, side: str, name: str) -> tuple[Any, ...]:
+    """The key renames of input or output `name` (`side`), () when its keys are ROS names."""
+    return next((t for s, n, t in resolved.binding.renames if (s, n) == (side, name)), ())
 
 
 def outcome_of(resolved: Resolved, answer: Any, default: str) -> str:
@@ -128,5 +137,8 @@ def outcome_of(resolved: Resolved, answer: Any, default: str) -> str:
 
 
 def assignments(resolved: Resolved, args: Mapping[str, Any]) -> list[tuple[str, Any]]:
-    """(field path, value) for every mapped input the call gives."""
-    return [(path, args.get(name)) for name, path in resolved.binding.inputs]
+    """(field path, value) for every mapped input the call gives, with ROS field names."""
+    return [
+        (path, renamed(args.get(name), renames(resolved, "input", name), True))
+        for name, path in resolved.binding.inputs
+    ]

@@ -123,10 +123,14 @@ def to_message(message_type: Any, value: Any, where: str = "message") -> Any:
 
 def build(message_type: Any, assignments: Sequence[tuple[str, Any]], where: str) -> Any:
     """A message of `message_type` with the value of each (field path, value) set; a None
-    value leaves its field at the default (an input the behaviour was not given)."""
+    value leaves its field at the default (an input the behaviour was not given). The empty
+    path is the whole message (a dict of its fields), set before the paths inside it."""
     message = message_type()
-    for path, value in assignments:
+    for path, value in sorted(assignments, key=lambda item: item[0] != ""):
         if value is None:
+            continue
+        if path == "":
+            message = to_message(message_type, value, where)
             continue
         *parents, last = check_path(message_type, path)
         owner = message
@@ -140,6 +144,8 @@ def build(message_type: Any, assignments: Sequence[tuple[str, Any]], where: str)
 def check_path(message_type: Any, path: str) -> list[str]:
     """The names along a field path (`pose.position.x`); ConversionError if a name is not a
     field of the message it is looked up in."""
+    if path == "":  # the whole message
+        return []
     names = path.split(".")
     current = message_type
     for depth, name in enumerate(names):
@@ -155,9 +161,9 @@ def check_path(message_type: Any, path: str) -> list[str]:
 
 
 def get_path(message: Any, path: str) -> Any:
-    """The plain value at a field path of a message."""
+    """The plain value at a field path of a message (the empty path: all of it)."""
     value = message
-    for name in path.split("."):
+    for name in path.split(".") if path else ():
         value = getattr(value, name)
     return plain(value)
 
@@ -175,6 +181,23 @@ def plain(value: Any) -> Any:
     if isinstance(value, list | tuple):
         return [plain(item) for item in value]
     return value
+
+
+def renamed(value: Any, renames: Sequence[Any], to_ros: bool) -> Any:
+    """A model value with its dict keys renamed to the ROS field names (`to_ros`) or back, by
+    `renames`: (model key, ROS name, renames inside) triples; lists are renamed item by item."""
+    if not renames:
+        return value
+    if isinstance(value, list | tuple):
+        return [renamed(item, renames, to_ros) for item in value]
+    if not isinstance(value, Mapping):
+        return value
+    table = {(m if to_ros else r): (r if to_ros else m, inner) for m, r, inner in renames}
+    result: dict[str, Any] = {}
+    for key, item in value.items():
+        name, inner = table.get(key, (key, ()))
+        result[name] = renamed(item, inner, to_ros)
+    return result
 
 
 def _shown(value: Any) -> str:

@@ -33,7 +33,9 @@ class Binding:
     `outputs` field paths of the result, response or message to behaviour outputs. A non-empty
     `outcome` names a field giving the outcome: a string naming it, or a bool (false: aborted).
     `timeout_s` (None: the kind's default) is the default of the ROS parameter
-    `behaviours.<key>.timeout_s`.
+    `behaviours.<key>.timeout_s`. An empty field path is the whole goal, request or message.
+    `renames` gives, per input or output, the dict keys of its value that the ROS fields name
+    otherwise: `("input", "target", (("posX", "pos_x", ()),))` (nested: the third item).
     """
 
     kind: str
@@ -45,6 +47,7 @@ class Binding:
     timeout_s: float | None = None
     direction: str = ""  # topics only
     key: str = ""  # the behaviour's parameter name (lower snake case); "" derives one
+    renames: tuple[tuple[str, str, tuple[Any, ...]], ...] = ()  # (input|output, name, renames)
 
 
 @dataclass(frozen=True, slots=True)
