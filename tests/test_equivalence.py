@@ -56,10 +56,6 @@ def test_reference_models_are_here() -> None:
 PYTHON_BACKENDS = [b for b in backend_names() if b in replay.BACKENDS and b != "scxml"]
 ALL_BACKENDS = ["asyncio", "smach", "scxml", "rclpy"]
 RCLPY_CASES = [(FIREWATCH, "Scout"), (SAR, "UAV")]
-# Models whose types the ROS mapping does not carry yet: sequences become `float64[]` only once
-# the rclpy backend maps `Property.many` (docs/ros2.md, "Structured data"); until then an output
-# a behaviour does not give arrives as 0, not []. Remove the model from here with that change.
-RCLPY_PENDING = {DISPATCH}
 RCLPY_SAMPLE = 6  # scenarios per case on rclpy (its replay is slow)
 
 Trace = list[dict[str, Any]]
@@ -108,8 +104,6 @@ def test_backends_agree_with_qt_scxml(model: Path, member: str, qt_available: No
         f"the walks should visit several configurations: {configurations}"
     )
     for backend in sorted(PYTHON_BACKENDS, key=lambda b: b == "rclpy"):
-        if backend == "rclpy" and model in RCLPY_PENDING:
-            continue
         if backend == "rclpy":
             need_rclpy()  # last: without the `ros` extra, the others were still compared
         traces = replay.replay_many(model, member, scenarios, backend)
@@ -389,12 +383,14 @@ DISPATCH_OMITTED = [
 ]
 
 
-@pytest.mark.parametrize("backend", [b for b in ALL_BACKENDS if b != "rclpy"])  # RCLPY_PENDING
+@pytest.mark.parametrize("backend", ALL_BACKENDS)
 def test_dispatch_omitted_enum_output_is_its_first_literal(
     backend: str, request: pytest.FixtureRequest
 ) -> None:
     if backend == "scxml":
         request.getfixturevalue("qt_available")
+    if backend == "rclpy":
+        need_rclpy()
     (trace,) = replay.replay_many(DISPATCH, "Rover", [DISPATCH_OMITTED], backend)
     planned, aborted = trace[2], trace[4]
     assert planned["data"]["mode"] == "home" and planned["data"]["route"] == [1.0], (

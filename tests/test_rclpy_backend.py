@@ -25,11 +25,13 @@ from swarmgen.backends.rclpy_backend import (
     nodes_package,
 )
 from swarmgen.chart.lower import lower
+from swarmgen.ros.interfaces import interface_type
 from tests.conftest import ROOT, tool
 from tests.modelkit import ModelKit
 from tests.skips import need_rclpy, requires_rclpy
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
+DISPATCH = ROOT / "tests" / "fixtures" / "models" / "dispatch.xmi"
 SCENARIO = ROOT / "sample_models" / "sar" / "scenarios" / "uav_mission.json"
 TIMESTAMP = re.compile(r"\d{4}-\d{2}-\d{2}|\d{2}:\d{2}")
 RUFF = [
@@ -433,6 +435,65 @@ def test_every_sample_renders_valid_python() -> None:
         for path, text in sources.items():
             ast.parse(text, filename=str(path))  # raises SyntaxError on a name that slipped
     assert set(SAMPLE_MODELS) <= rendered
+
+
+def test_private_actions_carry_sequences_and_enumerations() -> None:
+    """Dispatch (no rosType): a sequence is an array field, an enumeration a string field, a
+    data type one JSON string; the specs say how each value travels, parameters too."""
+    result = pipeline.compile_model(DISPATCH, backends=["rclpy"])
+    assert not pipeline.dg.has_errors(result.validation.diagnostics)
+    files = {str(p): t for p, t in result.files.items()}
+    plan = files["rclpy/dispatch_interfaces/action/Plan.action"].splitlines()
+    assert plan[1:] == [
+        "---",
+        "string mode",
+        "float64[] route",
+        "string zone",
+        "string outcome",
+        "---",
+        "string status",
+    ]
+    follow = files["rclpy/dispatch_interfaces/action/Follow.action"].splitlines()
+    assert follow[1] == "float64[] route"
+    rover = files["rclpy/dispatch_nodes/dispatch_nodes/rover.py"]
+    for field in [
+        'Field("mode", "mode", "enum")',
+        'Field("route", "route", "float64[]")',
+        'Field("zone", "zone", "json")',
+    ]:
+        assert field in rover, field
+    assert 'b.zeros({"last": "search", "mode": "search"})' in rover  # the first literal
+    assert 'Parameter("data.mode", "string", "search"' in rover
+    assert 'Parameter("data.route", "json", []' in rover and "route (Real[*])" in rover
+    enums = {"Mode"}
+    assert [
+        interface_type(t, enums) for t in ("Real[]", " int[] ", "Mode[]", "Zone[]", "Mode")
+    ] == [
+        "float64[]",
+        "int64[]",
+        "string[]",
+        "string",
+        "string",
+    ]
+
+
+def test_private_field_values_round_trip() -> None:
+    """encode/decode/fits of the private action's fields: arrays (rclpy hands numeric arrays
+    back as array.array), enumerations (empty: not given, so the first literal is written)."""
+    need_rclpy()
+    from array import array
+
+    from swarmgen.ros.runtime.messages import decode, encode, fits
+
+    assert encode("float64[]", [1, 2.5]) == [1.0, 2.5]
+    assert encode("float64[]", None) == [] and encode("int64[]", "x") == []
+    assert decode("float64[]", array("d", [1.0, 2.5])) == (True, [1.0, 2.5])
+    assert decode("int64[]", array("q", [3])) == (True, [3])
+    assert decode("string[]", ["search"]) == (True, ["search"])
+    assert encode("enum", "track") == "track" and encode("enum", None) == ""
+    assert decode("enum", "") == (False, "") and decode("enum", "home") == (True, "home")
+    assert fits("float64[]", [1.0, 2]) and not fits("float64[]", ["a"])
+    assert not fits("float64[]", 1.0) and fits("enum", "x") and not fits("enum", 3)
 
 
 # --- replay on real rclpy

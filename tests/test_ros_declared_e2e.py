@@ -12,7 +12,6 @@ discovery, a ROS_DOMAIN_ID of this test run and its logs in the test's tmp direc
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import json
 import os
@@ -27,11 +26,11 @@ import pytest
 pytest.importorskip("rclpy", reason="rclpy comes with the `ros` extra: run `make ros`")
 pytest.importorskip("psutil", reason="psutil comes with the `ros` extra: run `make ros`")
 
-import psutil
 
 from swarmgen import pipeline
 from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import nodes_package
+from tests import rosproc
 from tests.conftest import ROOT
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
@@ -61,37 +60,6 @@ def sar(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     }
 
 
-def _run(command: list[str], env: dict[str, str], cwd: Path, limit: int) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        ["timeout", "-k", "5", str(limit), *command],
-        env=env,
-        cwd=cwd,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-
-
-def _stop(proc: subprocess.Popen[str], limit: float) -> tuple[int, str, str]:
-    """SIGTERM to the process tree (`timeout` and what it runs), then its output."""
-    with contextlib.suppress(psutil.NoSuchProcess):
-        for child in psutil.Process(proc.pid).children(recursive=True):
-            child.terminate()
-    return _finish(proc, limit)
-
-
-def _finish(proc: subprocess.Popen[str], limit: float) -> tuple[int, str, str]:
-    try:
-        stdout, stderr = proc.communicate(timeout=limit)
-    except subprocess.TimeoutExpired:
-        with contextlib.suppress(psutil.NoSuchProcess):
-            for child in psutil.Process(proc.pid).children(recursive=True):
-                child.kill()
-        proc.kill()
-        stdout, stderr = proc.communicate()
-    return proc.returncode, stdout, stderr
-
-
 def _wait_ready(proc: subprocess.Popen[str], limit: float) -> None:
     assert proc.stdout is not None
     deadline = time.monotonic() + limit
@@ -101,7 +69,7 @@ def _wait_ready(proc: subprocess.Popen[str], limit: float) -> None:
             break
         if json.loads(line).get("event") == "ready":
             return
-    raise AssertionError(f"the platform did not come up: {_finish(proc, 5)}")
+    raise AssertionError(f"the platform did not come up: {rosproc.finish(proc, 5)}")
 
 
 def _bag(path: Path) -> list[tuple[str, str, dict[str, Any]]]:
@@ -130,13 +98,13 @@ def test_sar_swarm_runs_on_the_declared_interfaces(sar: dict[str, Any], tmp_path
         prefixes=[sar["prefix"]],
     )
     bag = tmp_path / "platform_bag"
-    platform = _run(
+    platform = rosproc.start(
         [sys.executable, "-m", "tests.ros_platform.sar_platform", str(bag), str(INTERFACES),
          "2", "2"],
         env, tmp_path, 60,
     )  # fmt: skip
     _wait_ready(platform, 30)
-    swarm = _run(
+    swarm = rosproc.start(
         [
             sys.executable, "-m", f"{sar['package']}.launch_swarm", "--uav", "2", "--ugv", "2",
             "--no-simulation", "--time-scale", str(TIME_SCALE), "--events",
@@ -144,8 +112,8 @@ def test_sar_swarm_runs_on_the_declared_interfaces(sar: dict[str, Any], tmp_path
         ],
         env, tmp_path, 45,
     )  # fmt: skip
-    swarm_code, swarm_out, swarm_err = _finish(swarm, 50)
-    platform_code, platform_out, platform_err = _stop(platform, 15)
+    swarm_code, swarm_out, swarm_err = rosproc.finish(swarm, 50)
+    platform_code, platform_out, platform_err = rosproc.stop(platform, 15)
     mission_s = time.monotonic() - started
     assert swarm_code == 0, swarm_err[-3000:]
     assert platform_code == 0, platform_err[-3000:]
@@ -195,7 +163,7 @@ def test_launcher_refuses_a_missing_declared_type_in_one_line(
         tmp_path / "roslog", domain_id=DOMAIN, python_path=[sar["path"]], prefixes=[]
     )
     command = [sys.executable, "-m", f"{sar['package']}.launch_swarm", "--no-simulation"]
-    code, out, err = _finish(_run(command, env, tmp_path, 30), 40)
+    code, out, err = rosproc.finish(rosproc.start(command, env, tmp_path, 30), 40)
     assert code == 2, (out, err)
     lines = err.strip().splitlines()
     assert len(lines) == 1, err

@@ -10,10 +10,8 @@ talks to the swarm over DDS only: it publishes the station events and records ev
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
 from typing import Any
@@ -29,6 +27,7 @@ from swarmgen import pipeline
 from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import interfaces_package, nodes_package
 from swarmgen.trace.reader import read_events
+from tests import rosproc
 from tests.conftest import ROOT
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
@@ -175,31 +174,6 @@ def _env(sar: dict[str, Any], tmp_path: Path) -> dict[str, str]:
     return harness.ros_env(tmp_path / "roslog", domain_id=DOMAIN, python_path=[sar["path"]])
 
 
-def _run(command: list[str], env: dict[str, str], cwd: Path, limit: int) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        ["timeout", "-k", "5", str(limit), *command],
-        env=env,
-        cwd=cwd,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-
-
-def _finish(proc: subprocess.Popen[str], limit: float) -> tuple[int, str, str]:
-    try:
-        stdout, stderr = proc.communicate(timeout=limit)
-    except subprocess.TimeoutExpired:
-        # `timeout` itself and what it runs: killing only `timeout` would orphan the python
-        # process, which keeps the pipes open and `communicate()` waiting forever
-        with contextlib.suppress(psutil.NoSuchProcess):
-            for child in psutil.Process(proc.pid).children(recursive=True):
-                child.kill()
-        proc.kill()
-        stdout, stderr = proc.communicate()
-    return proc.returncode, stdout, stderr
-
-
 def _leftovers(marker: str) -> list[str]:
     found = []
     for proc in psutil.process_iter(["pid", "cmdline", "environ"]):
@@ -225,22 +199,22 @@ def test_sar_swarm_rescues_and_stops_on_real_dds(sar: dict[str, Any], tmp_path: 
     members = ["uav_1", "uav_2", "ugv_1", "ugv_2"]
     station_py = tmp_path / "station.py"
     station_py.write_text(STATION, encoding="utf-8")
-    swarm = _run(
+    swarm = rosproc.start(
         [
             sys.executable, "-m", f"{sar['package']}.launch_swarm", "--uav", "2", "--ugv", "2",
             "--script", str(SCRIPT), "--time-scale", str(TIME_SCALE),
         ],
         env, tmp_path, 60,
     )  # fmt: skip
-    station = _run(
+    station = rosproc.start(
         [
             sys.executable, str(station_py), sar["interfaces"], "mission", "30",
             json.dumps(members), json.dumps(["Landed", "Stopped"]), str(tmp_path / "bag"),
         ],
         env, tmp_path, 60,
     )  # fmt: skip
-    station_code, station_out, station_err = _finish(station, 70)
-    swarm_code, swarm_out, swarm_err = _finish(swarm, 30)
+    station_code, station_out, station_err = rosproc.finish(station, 70)
+    swarm_code, swarm_out, swarm_err = rosproc.finish(swarm, 30)
     assert station_code == 0, station_err[-3000:]
     seen = json.loads(station_out.strip().splitlines()[-1])
     assert seen["ok"], seen.get("error")
@@ -313,7 +287,7 @@ def test_one_process_per_member_with_parameters(sar: dict[str, Any], tmp_path: P
     for member, altitude in (("uav_1", "7.5"), ("uav_2", "1.5")):
         ros = ["--ros-args", "-r", f"__ns:=/{member}"]
         members.append(
-            _run(
+            rosproc.start(
                 [sys.executable, "-m", f"{package}.uav", *ros, "-p", f"data.altitude:={altitude}"],
                 env,
                 tmp_path,
@@ -324,7 +298,7 @@ def test_one_process_per_member_with_parameters(sar: dict[str, Any], tmp_path: P
             f"import sys; from {package}.launch_swarm import simulated; sys.exit(simulated())"
         )
         servers.append(
-            _run(
+            rosproc.start(
                 [
                     sys.executable, "-c", simulated, *ros, "-p", "member_type:=UAV",
                     "-p", f"script:={script}", "-p", "time_scale:=1.0",
@@ -335,14 +309,14 @@ def test_one_process_per_member_with_parameters(sar: dict[str, Any], tmp_path: P
     station_py = tmp_path / "station.py"
     station_py.write_text(STATION, encoding="utf-8")
     try:
-        station = _run(
+        station = rosproc.start(
             [
                 sys.executable, str(station_py), sar["interfaces"], "takeoff", "20",
                 json.dumps(["uav_1", "uav_2"]), json.dumps(["Landed"]),
             ],
             env, tmp_path, 40,
         )  # fmt: skip
-        code, out, err = _finish(station, 50)
+        code, out, err = rosproc.finish(station, 50)
         assert code == 0, err[-3000:]
         seen = json.loads(out.strip().splitlines()[-1])
         assert seen["ok"], seen.get("error")
@@ -354,12 +328,12 @@ def test_one_process_per_member_with_parameters(sar: dict[str, Any], tmp_path: P
     finally:
         # a member process ends by itself in its final state; the servers run until SIGTERM
         # (sent to the python under `timeout`: rclpy shuts down cleanly and exits 0)
-        member_results = [_finish(proc, 15) for proc in members]
+        member_results = [rosproc.finish(proc, 15) for proc in members]
         for proc in servers:
             if proc.poll() is None:
                 for child in psutil.Process(proc.pid).children():
                     child.terminate()
-        server_results = [_finish(proc, 15) for proc in servers]
+        server_results = [rosproc.finish(proc, 15) for proc in servers]
     for code, _, err in member_results + server_results:
         assert code == 0, err[-2000:]
     assert _leftovers(str(tmp_path)) == []

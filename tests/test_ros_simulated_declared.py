@@ -209,10 +209,96 @@ def _simulate(kind: str, script: dict[str, Any]) -> dict[str, Any]:
         rclpy.try_shutdown(context=context)
 
 
+# Data type keys that are not ROS field names travel renamed (`Binding.renames`): the model's
+# `{"frameId": ...}` is a std_msgs/Header's `frame_id`, both in a goal the simulated server reads
+# and in a message it publishes.
+HEADER_RENAMES = (("frameId", "frame_id", ()),)
+RENAMED_SCRIPT = {
+    "behaviours": {
+        "Fly": {"duration": 0.1, "outcome": "${'succeeded' if goal.target.frameId == 'map' else 'blocked'}"},
+        "Look": {"duration": 0.1, "outputs": {"head": {"frameId": "odom"}}},
+    }
+}  # fmt: skip
+
+
+def renamed_spec() -> Any:
+    """Fly (GoTo, input `target` -> `target_pose.header`), Look (PoseStamped, output `head`
+    <- `header`), both with the Header's `frame_id` as the model's `frameId`."""
+    from swarmgen.ros.runtime.spec import BehaviourSpec, Binding, MemberSpec
+
+    fly = Binding("action", GOTO, "fly", (("target", "target_pose.header"),), outcome="outcome",
+                  renames=(("input", "target", HEADER_RENAMES),))  # fmt: skip
+    look = Binding("topic", POSE, "look", (), (("header", "head"),), timeout_s=3.0,
+                   direction="subscribe", renames=(("output", "head", HEADER_RENAMES),))  # fmt: skip
+    behaviours = {
+        name: BehaviourSpec(
+            name, "", name.lower(), "HardwareFunction", outcomes=OUTCOMES, binding=binding
+        )
+        for name, binding in (("Fly", fly), ("Look", look))
+    }
+    return MemberSpec("Rover", "rover", "rover", PACKAGE, _renamed_chart, {}, behaviours)
+
+
+def _renamed_chart() -> Any:
+    from swarmgen.runtime.chart import Call, ChartBuilder
+
+    b = ChartBuilder("rover", data={"target": {"frameId": "map"}, "head": None})
+    b.node("Idle", "state")
+    for final in ("Done", "Blocked", "Failed"):
+        b.node(final, "final")
+    b.transition("Idle", ("go",), ("Flying",))
+    fly = Call("Fly", "HardwareFunction", lambda ctx: {"target": ctx.data["target"]}, (), OUTCOMES)
+    look = Call("Look", "HardwareFunction", lambda ctx: {}, (("head", "head"),), OUTCOMES)
+    for state, call, after in (("Flying", fly, "Looking"), ("Looking", look, "Done")):
+        b.node(state, "state", call=call)
+        b.transition(state, (f"outcome.{state}.succeeded",), (after,))
+        b.transition(state, (f"outcome.{state}.blocked",), ("Blocked",))
+        for failed in ("aborted", "preempted"):
+            b.transition(state, (f"outcome.{state}.{failed}",), ("Failed",))
+    b.initial(None, ("Idle",))
+    return b.build()
+
+
+def _simulate_renamed() -> dict[str, Any]:
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+
+    from swarmgen.ros.runtime.node import MemberNode
+    from swarmgen.ros.runtime.process import spin_until
+    from swarmgen.ros.runtime.simulated import SimulatedBehaviours
+
+    spec = renamed_spec()
+    context = Context()
+    rclpy.init(args=["renamed"], context=context)
+    executor = SingleThreadedExecutor(context=context)
+    sim = SimulatedBehaviours({"Rover": spec}, {}, {}, script=RENAMED_SCRIPT,
+                              namespace="/renamed", context=context)  # fmt: skip
+    member = MemberNode(spec, namespace="/renamed", scheduler=sim.scheduler, context=context)
+    try:
+        executor.add_node(sim)
+        executor.add_node(member)
+        spin_until(executor, member.servers_ready, timeout=10.0)
+        member.start()
+        member.deliver(member.engine.make_event("go", None, "station"))
+        spin_until(executor, lambda: member.finished, timeout=10.0)
+        return {"final": member.active(), "head": member.engine.data.get("head"),
+                "errors": member.errors + sim.errors}  # fmt: skip
+    finally:
+        member.stop()
+        executor.shutdown()
+        member.destroy_node()
+        sim.destroy_node()
+        rclpy.try_shutdown(context=context)
+
+
 def main(argv: list[str]) -> int:
     """`replay`: both specs' traces; `simulate`: both specs under SCRIPT (and a variant)."""
     if argv[0] == "replay":
         print(json.dumps(_replay()))
+        return 0
+    if argv[0] == "renamed":
+        print(json.dumps(_simulate_renamed()))
         return 0
     blocked = {
         "behaviours": {**SCRIPT["behaviours"], "Go": {"duration": 0.1, "outcome": "blocked"}}
@@ -345,3 +431,12 @@ def test_an_outcome_the_interface_cannot_carry_is_a_script_failure(
         len(run["errors"]) == 1
         and "cannot be carried by the bool field 'success'" in (run["errors"][0])
     ), run["errors"]
+
+
+def test_simulated_servers_apply_renamed_keys(env: dict[str, str]) -> None:
+    """The simulated GoTo server reads the goal's Header as `{"frameId": "map"}` (its script
+    succeeds only then), and the PoseStamped it publishes from the script's
+    `{"frameId": "odom"}` reaches the member as the model's key again."""
+    run = _run(env, "renamed")
+    assert run["errors"] == [] and run["final"] == ["Done"], run
+    assert run["head"]["frameId"] == "odom" and "frame_id" not in run["head"], run

@@ -37,7 +37,12 @@ from swarmgen.backends.rclpy_declared import (
     exec_depends,
     user_packages,
 )
-from swarmgen.backends.rclpy_parameters import field_type, member_parameters
+from swarmgen.backends.rclpy_parameters import (
+    FieldView,
+    field_type,
+    field_view,
+    member_parameters,
+)
 from swarmgen.backends.vendor import ros_runtime_files, runtime_files
 from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.generated import header, markdown_cell
@@ -50,7 +55,6 @@ from swarmgen.ros.interfaces import (
     ACTIVE_STATES_MSG,
     EVENT_MSG,
     behaviour_action,
-    check_field_name,
     check_package_name,
     check_type_name,
     render_interface_package,
@@ -121,29 +125,6 @@ def _camel(name: str) -> str:
     return text if text[:1].isalpha() else f"B{text}"
 
 
-def _field_name(name: str, taken: set[str]) -> str:
-    base = ros_name(name)
-    for candidate in (base, f"{base}_value", *(f"{base}_{n}" for n in range(2, 100))):
-        try:
-            check_field_name(candidate)
-        except ValueError:
-            continue
-        if candidate not in taken:
-            taken.add(candidate)
-            return candidate
-    raise ValueError(f"no ROS field name for {name!r}")
-
-
-@dataclass(frozen=True)
-class FieldView:
-    """One behaviour argument or output as a field of its ROS action."""
-
-    name: str  # the model's identifier (argument / output)
-    field: str  # ROS field name
-    type: str  # float64, int64, bool, string, json
-    model_type: str | None
-
-
 @dataclass(frozen=True)
 class BehaviourView:
     """A behaviour as the rclpy backend renders it: its action, ROS name and fields."""
@@ -155,6 +136,7 @@ class BehaviourView:
     outputs: tuple[FieldView, ...]
     note: str  # why the action name differs from the declared rosName ("" if it does not)
     declared: Declared | None = None  # runs on its declared type (no private action)
+    enumerations: frozenset[str] = frozenset()  # the model's enumeration names
 
     @property
     def runs_as(self) -> str:
@@ -169,6 +151,7 @@ class BehaviourView:
         return behaviour_action(
             [(f.field, f.model_type) for f in self.inputs],
             [(f.field, f.model_type) for f in self.outputs],
+            self.enumerations,
         )
 
     def spec(self) -> str:
@@ -196,10 +179,13 @@ class BehaviourView:
 
 
 def behaviour_views(
-    charts: tuple[Chart, ...], bound: dict[str, Declared] | None = None
+    charts: tuple[Chart, ...],
+    bound: dict[str, Declared] | None = None,
+    enumerations: frozenset[str] = frozenset(),
 ) -> dict[str, BehaviourView]:
     """Every behaviour the charts run, by model name, with its action type, name and fields,
-    and its binding when it runs on its declared type (`bound`, by model name)."""
+    and its binding when it runs on its declared type (`bound`, by model name);
+    `enumerations` (the model's) travel as strings, sequences as arrays (`field_type`)."""
     bound = bound or {}
     infos: dict[str, BehaviourInfo] = {}
     for chart in charts:
@@ -232,16 +218,10 @@ def behaviour_views(
         names.add(action_name)
         in_taken: set[str] = set()
         out_taken: set[str] = {"outcome"}
-        inputs = tuple(
-            FieldView(ident, _field_name(ident, in_taken), field_type(type_), type_)
-            for ident, type_ in info.inputs
-        )
-        outputs = tuple(
-            FieldView(ident, _field_name(ident, out_taken), field_type(type_), type_)
-            for ident, type_ in info.outputs
-        )
+        inputs = tuple(field_view(info, p, in_taken, enumerations) for p in info.inputs)
+        outputs = tuple(field_view(info, p, out_taken, enumerations) for p in info.outputs)
         views[name] = BehaviourView(
-            info, candidate, action_name, inputs, outputs, note, bound.get(name)
+            info, candidate, action_name, inputs, outputs, note, bound.get(name), enumerations
         )
     return views
 
@@ -262,7 +242,7 @@ class RclpyBackend:
         names = sorted({info.name for chart in charts for info in chart.behaviours})
         own = (interfaces_package(model), nodes_package(model))
         declared = declared_bindings(model, names, self.interfaces, own)
-        views = behaviour_views(charts, declared)
+        views = behaviour_views(charts, declared, frozenset(e.name for e in model.enumerations))
         view = package_view(model, charts)
         listed = ("action_msgs", "builtin_interfaces", "rcl_interfaces")  # package.xml.j2's
         view["depends"] = exec_depends(declared.values(), (*own, *listed))

@@ -1,27 +1,88 @@
-"""The ROS parameters of a generated member node (`PARAMETERS`): member data defaults, the
-hardware model (read only) and each behaviour's declared `rosKind`/`rosName`/`rosType` (read
-only metadata). Names the runtime declares itself (`behaviours.<key>.timeout_s` of service and
-topic bindings) are reserved, so no generated parameter takes them."""
+"""How model values travel in the rclpy backend's private action fields (`field_type`,
+`FieldView`) and in the ROS parameters of a generated member node (`PARAMETERS`): member data
+defaults, the hardware model (read only) and each behaviour's declared `rosKind`/`rosName`/
+`rosType` (read only metadata). Names the runtime declares itself (`behaviours.<key>.timeout_s`
+of service and topic bindings) are reserved, so no generated parameter takes them."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Collection, Iterable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 from swarmgen.backends.pyrender import py_literal
-from swarmgen.chart.model import Chart
+from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.ir.nodes import Model, Value
+from swarmgen.ir.primitives import primitive
 from swarmgen.names import IdAllocator, ros_name
-from swarmgen.ros.interfaces import interface_type
+from swarmgen.ros.interfaces import check_field_name, interface_type
 
 
-def field_type(type_name: str | None) -> str:
-    """How a value of a model type travels in a ROS field: float64, int64, bool, string, or
-    json (a string field carrying JSON: data types such as Pose, and untyped values)."""
-    ros = interface_type(type_name)
-    if ros == "string" and (type_name or "").strip().lower() != "string":
+def field_type(
+    type_name: str | None, many: bool = False, enumerations: Collection[str] = ()
+) -> str:
+    """How a value of a model type travels in a ROS field of the private action: float64,
+    int64, bool, string, enum (a string field holding the literal's name), an array of these
+    for a sequence (`float64[]`; `string[]` of literals), or json (a string field carrying
+    JSON: data types such as Pose, untyped values, and sequences of either)."""
+    if many:
+        element = field_type(type_name, False, enumerations)
+        if element == "json":
+            return "json"
+        return f"{'string' if element == 'enum' else element}[]"
+    if type_name is not None and type_name in enumerations:
+        return "enum"
+    if primitive(type_name) is None:
         return "json"
-    return ros
+    return interface_type(type_name)
+
+
+def _field_name(name: str, taken: set[str]) -> str:
+    base = ros_name(name)
+    for candidate in (base, f"{base}_value", *(f"{base}_{n}" for n in range(2, 100))):
+        try:
+            check_field_name(candidate)
+        except ValueError:
+            continue
+        if candidate not in taken:
+            taken.add(candidate)
+            return candidate
+    raise ValueError(f"no ROS field name for {name!r}")
+
+
+@dataclass(frozen=True)
+class FieldView:
+    """One behaviour argument or output as a field of its ROS action."""
+
+    name: str  # the model's identifier (argument / output)
+    field: str  # ROS field name
+    type: str  # float64, int64, bool, string, enum, json, or an array `float64[]` (`field_type`)
+    model_type: str | None  # `T[]` for a sequence of T (as `interfaces.interface_type` reads it)
+
+
+def field_view(
+    info: BehaviourInfo,
+    parameter: tuple[str, str | None],
+    taken: set[str],
+    enumerations: frozenset[str],
+) -> FieldView:
+    """One input or output of a private action: its field name and how its value travels."""
+    ident, type_ = parameter
+    many = ident in info.sequences
+    model_type = f"{type_ or ''}[]" if many else type_
+    kind = field_type(type_, many, enumerations)
+    return FieldView(ident, _field_name(ident, taken), kind, model_type)
+
+
+def parameter_type(
+    type_name: str | None, many: bool = False, enumerations: Collection[str] = ()
+) -> str:
+    """The type of a node parameter holding a model value: as `field_type`, but a sequence is
+    a JSON string and an enumeration a string (parameters carry no arrays of data here)."""
+    if many:
+        return "json"
+    found = field_type(type_name, False, enumerations)
+    return "string" if found == "enum" else found
 
 
 def _parameter(name: str, type_: str, default: Value, **extra: Any) -> str:
@@ -37,17 +98,20 @@ def member_parameters(
     taken = IdAllocator()
     for name in reserved:
         taken.claim(name)
+    enums = {e.name for e in model.enumerations}
+    member = next((m for m in model.member_types if m.name == chart.member), None)
+    many = {p.ident for p in member.data if p.many} if member is not None else set()
     found = [
         _parameter(
             taken.claim(f"data.{ros_name(item.id)}"),
-            field_type(item.type),
+            parameter_type(item.type, item.id in many, enums),
             item.initial,
             data=item.id,
-            description=f"member data {item.name} ({item.type or 'untyped'})",
+            description=f"member data {item.name} ({_type_text(item.type, item.id in many)})",
         )
         for item in chart.data
     ]
-    found += _hardware_parameters(model, chart, taken)
+    found += _hardware_parameters(model, chart, taken, enums)
     for info in chart.behaviours:
         prefix = f"behaviours.{ros_name(info.name)}"
         for key in ("ros_kind", "ros_name", "ros_type"):
@@ -65,7 +129,9 @@ def member_parameters(
     return found
 
 
-def _hardware_parameters(model: Model, chart: Chart, taken: IdAllocator) -> list[str]:
+def _hardware_parameters(
+    model: Model, chart: Chart, taken: IdAllocator, enums: Collection[str]
+) -> list[str]:
     """The member's hardware: part counts, component parameters and communication settings."""
     member = next((m for m in model.member_types if m.name == chart.member), None)
     components = {h.id: h for h in model.hardware}
@@ -88,7 +154,7 @@ def _hardware_parameters(model: Model, chart: Chart, taken: IdAllocator) -> list
             found.append(
                 _parameter(
                     taken.claim(f"{prefix}.{ros_name(prop.ident)}"),
-                    field_type(prop.type) if prop.type else "json",
+                    parameter_type(prop.type, prop.many, enums),
                     prop.default,
                     read_only=True,
                     description=f"{component.name}.{prop.name} ({prop.type or 'untyped'})",
@@ -101,3 +167,8 @@ def _hardware_parameters(model: Model, chart: Chart, taken: IdAllocator) -> list
                     _parameter(taken.claim(f"{prefix}.{key}"), "string", value, read_only=True)
                 )
     return found
+
+
+def _type_text(type_name: str | None, many: bool) -> str:
+    """A datum's type as a parameter description says it (`Real[*]` for a sequence)."""
+    return f"{type_name or 'untyped'}{'[*]' if many else ''}"

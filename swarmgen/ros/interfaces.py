@@ -14,7 +14,10 @@ Real, Double, Float                        float64
 Integer, Int, Long, UnlimitedNatural       int64        UnlimitedNatural's `*` is not representable
 Boolean, Bool                              bool
 String, no type (None)                     string
+an enumeration (`enumerations`)            string       the literal's name
 anything else (a DataType such as `Pose`)  string       the value travels as JSON text
+a sequence `T[]` of a primitive or enum    `F[]`        `F` the element's field type
+a sequence `T[]` of anything else          string       the whole list as one JSON text
 =========================================  ===========  ========================================
 
 Matching ignores case and surrounding spaces.
@@ -23,10 +26,11 @@ Matching ignores case and surrounding spaces.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
 from pathlib import PurePosixPath
 from xml.sax.saxutils import escape
 
+from swarmgen.ir.primitives import Primitive, primitive
 from swarmgen.ros.build import (
     BUILD_STAMP,
     InterfaceBuildError,
@@ -76,55 +80,61 @@ string member
 string[] states
 """
 
-_TYPES: dict[str, str] = {
-    "real": "float64",
-    "double": "float64",
-    "float": "float64",
-    "integer": "int64",
-    "int": "int64",
-    "long": "int64",
-    "unlimitednatural": "int64",
-    "boolean": "bool",
-    "bool": "bool",
-    "string": "string",
+_TYPES = {
+    Primitive.REAL: "float64",
+    Primitive.INTEGER: "int64",
+    Primitive.BOOLEAN: "bool",
+    Primitive.STRING: "string",
 }
 
 
-def interface_type(type_name: str | None) -> str:
+def interface_type(type_name: str | None, enumerations: Collection[str] = ()) -> str:
     """The ROS IDL field type for a model type (see the table in the module docstring).
 
-    Real/Double/Float -> float64, Integer/Int/Long/UnlimitedNatural -> int64, Boolean/Bool ->
-    bool, String or no type -> string; any other type (a model DataType such as `Pose`) ->
-    string, whose value is JSON text.
+    A type name ending in `[]` is a sequence of that type: an array of the element's field
+    type when it is a primitive or one of `enumerations`, else one `string` of JSON text.
     """
-    if type_name is None:
+    name = (type_name or "").strip()
+    if name.endswith("[]"):
+        element = name[:-2]
+        if primitive(element) is not None or element in enumerations:
+            return f"{interface_type(element, enumerations)}[]"
         return "string"
-    return _TYPES.get(type_name.strip().lower(), "string")
+    kind = primitive(name)
+    return "string" if kind is None else _TYPES[kind]
 
 
-def _fields(section: str, fields: Sequence[tuple[str, str | None]], taken: set[str]) -> list[str]:
+def _fields(
+    section: str,
+    fields: Sequence[tuple[str, str | None]],
+    taken: set[str],
+    enumerations: Collection[str],
+) -> list[str]:
     lines = []
     for raw_name, type_name in fields:
         name = check_field_name(raw_name.lower())
         if name in taken:
             raise ValueError(f"duplicate field {name!r} in the action's {section}")
         taken.add(name)
-        lines.append(f"{interface_type(type_name)} {name}")
+        lines.append(f"{interface_type(type_name, enumerations)} {name}")
     return lines
 
 
 def behaviour_action(
-    inputs: Sequence[tuple[str, str | None]], outputs: Sequence[tuple[str, str | None]]
+    inputs: Sequence[tuple[str, str | None]],
+    outputs: Sequence[tuple[str, str | None]],
+    enumerations: Collection[str] = (),
 ) -> str:
     """The .action text of a behaviour: goal = `inputs`, result = `outputs` + `string outcome`,
     feedback = `string status`.
 
-    Each field is `(name, model type)`; names are lower-cased and must then be valid ROS field
+    Each field is `(name, model type)` (`T[]` for a sequence; `enumerations` names the model's
+    enumerations, `interface_type`); names are lower-cased and must then be valid ROS field
     names (ValueError otherwise, also for duplicates and for an output named `outcome`).
     """
-    goal = _fields("goal", inputs, set())
+    goal = _fields("goal", inputs, set(), enumerations)
     result_names: set[str] = set()
-    result = _fields("result", outputs, result_names)
+    result = _fields("result", outputs, result_names, enumerations)
     if "outcome" in result_names:
         raise ValueError(
             "an action output may not be named 'outcome' (it is added to every result)"

@@ -14,8 +14,8 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from .bindings import Resolved
-from .convert import build, get_path
+from .bindings import Resolved, renames
+from .convert import build, get_path, renamed
 from .messages import decode, encode, fits
 from .spec import BehaviourSpec
 
@@ -87,8 +87,14 @@ class _Declared(Served):
         self.request = request
 
     def inputs(self) -> dict[str, Any]:
-        """The inputs the binding maps, read from the goal, request or message."""
-        return {name: get_path(self.request, path) for name, path in self.resolved.binding.inputs}
+        """The inputs the binding maps, read from the goal, request or message (data type
+        keys renamed back to the model's names, `Binding.renames`)."""
+        return {
+            name: renamed(
+                get_path(self.request, path), renames(self.resolved, "input", name), False
+            )
+            for name, path in self.resolved.binding.inputs
+        }
 
     def running(self) -> None:
         """Declared interfaces get no feedback from a script."""
@@ -98,7 +104,10 @@ class _Declared(Served):
         (ValueError, also ConversionError, if either cannot be carried)."""
         binding = self.resolved.binding
         answer_type = self.resolved.answer
-        pairs: list[tuple[str, Any]] = [(path, outputs.get(name)) for path, name in binding.outputs]
+        pairs: list[tuple[str, Any]] = [
+            (path, renamed(outputs.get(name), renames(self.resolved, "output", name), True))
+            for path, name in binding.outputs
+        ]
         if binding.outcome:
             pairs.append((binding.outcome, _outcome_value(answer_type, binding.outcome, outcome)))
         elif outcome not in self.carried():

@@ -35,10 +35,14 @@ INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 
 def encode(type_: str, value: Any) -> Any:
     """A Python value as the ROS field of `type_` holds it (lenient: unusable values give the
-    field's zero value; JSON fields give `""` for a value that is absent)."""
+    field's zero value; JSON and enumeration fields give `""` for a value that is absent; an
+    array field `T[]` takes a list item by item)."""
+    if type_.endswith("[]"):
+        items = value if isinstance(value, list | tuple) else ()
+        return [encode(type_[:-2], item) for item in items]
     if type_ == "json":
         return "" if value is None else json.dumps(value, default=str, sort_keys=True)
-    if type_ == "string":
+    if type_ in ("string", "enum"):
         return value if isinstance(value, str) else ("" if value is None else str(value))
     if type_ == "bool":
         return bool(value) if isinstance(value, bool | int | float) else False
@@ -56,6 +60,10 @@ def fits(type_: str, value: Any) -> bool:
     not one `encode` would replace by the zero: what a behaviour's output must be."""
     if value is None or type_ in ("json", "string"):
         return True
+    if type_.endswith("[]"):
+        return isinstance(value, list | tuple) and all(fits(type_[:-2], v) for v in value)
+    if type_ == "enum":
+        return isinstance(value, str)
     if type_ == "bool":
         return isinstance(value, bool)
     number = isinstance(value, int | float) and not isinstance(value, bool)
@@ -65,7 +73,10 @@ def fits(type_: str, value: Any) -> bool:
 
 
 def decode(type_: str, value: Any) -> tuple[bool, Any]:
-    """(present, value) of a ROS field; an empty JSON field is absent."""
+    """(present, value) of a ROS field; an empty JSON or enumeration field is absent (no
+    literal is empty: the output's zero, the first literal, is written instead)."""
+    if type_.endswith("[]"):  # rclpy gives numeric arrays as array.array
+        return True, [decode(type_[:-2], item)[1] for item in value]
     if type_ == "json":
         if value == "":
             return False, None
@@ -73,8 +84,12 @@ def decode(type_: str, value: Any) -> tuple[bool, Any]:
             return True, json.loads(value)
         except ValueError:
             return True, value
+    if type_ == "enum":
+        return value != "", value
     if type_ == "float64":
         return True, float(value)
+    if type_ == "int64":
+        return True, int(value)
     return True, value
 
 

@@ -14,8 +14,11 @@ from .._runtime.chart import Chart
 class Field:
     """A behaviour input or output: its model identifier, its ROS field and how it is encoded.
 
-    `type` is the ROS field type (`float64`, `int64`, `bool`, `string`) or `json`: a `string`
-    field carrying the JSON text of a value of a model DataType (`Pose`) or of no declared type.
+    `type` is the ROS field type (`float64`, `int64`, `bool`, `string`), `enum` (a `string`
+    field holding a literal's name; empty: not given), an array of one of these (`float64[]`,
+    `string[]` for enumerations: a model sequence) or `json`: a `string` field carrying the
+    JSON text of a value of a model DataType (`Pose`), of no declared type, or of a sequence
+    of either.
     """
 
     name: str
