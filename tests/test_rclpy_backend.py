@@ -439,7 +439,7 @@ def test_every_sample_renders_valid_python() -> None:
 
 def test_private_actions_carry_sequences_and_enumerations() -> None:
     """Dispatch (no rosType): a sequence is an array field, an enumeration a string field, a
-    data type one JSON string; the specs say how each value travels, parameters too."""
+    data type a message of the package; the specs say how each value travels, parameters too."""
     result = pipeline.compile_model(DISPATCH, backends=["rclpy"])
     assert not pipeline.dg.has_errors(result.validation.diagnostics)
     files = {str(p): t for p, t in result.files.items()}
@@ -448,7 +448,7 @@ def test_private_actions_carry_sequences_and_enumerations() -> None:
         "---",
         "string mode",
         "float64[] route",
-        "string zone",
+        "dispatch_interfaces/Zone zone",
         "string outcome",
         "---",
         "string status",
@@ -459,7 +459,7 @@ def test_private_actions_carry_sequences_and_enumerations() -> None:
     for field in [
         'Field("mode", "mode", "enum")',
         'Field("route", "route", "float64[]")',
-        'Field("zone", "zone", "json")',
+        'Field("zone", "zone", "dispatch_interfaces/Zone")',
     ]:
         assert field in rover, field
     assert 'b.zeros({"last": "search", "mode": "search"})' in rover  # the first literal
@@ -494,6 +494,97 @@ def test_private_field_values_round_trip() -> None:
     assert decode("enum", "") == (False, "") and decode("enum", "home") == (True, "home")
     assert fits("float64[]", [1.0, 2]) and not fits("float64[]", ["a"])
     assert not fits("float64[]", 1.0) and fits("enum", "x") and not fits("enum", 3)
+
+
+def survey_model(tmp_path: Path) -> Path:
+    """Survey: `Area` nests a `Pose`, a sequence of them, an enumeration, a «RosMessage»
+    `Point3` (geometry_msgs/msg/Point) and a key `tagId` the message spells `tag_id`; the
+    behaviour Scan takes an `Area` and gives a sequence of them."""
+    kit = ModelKit("Survey")
+    kit.enumeration("Mode", "search", "track")
+    kit.datatypes["Point3"] = {"x": "Real", "y": "Real", "z": "Real"}
+    kit.datatypes["Area"] = {
+        "centre": "Pose", "corners": "Pose[*]", "mode": "Mode", "tagId": "Integer",
+        "peak": "Point3", "tags": "String[*]",
+    }  # fmt: skip
+    kit.hardware("Camera", "Sensor")
+    kit.event("go", sender="station")
+    kit.behaviour(
+        "Scan", inputs={"area": "Area"}, outputs={"found": "Area[*]"}, requires=["Camera"]
+    )
+    m = kit.machine("SurveyMission")
+    m.initial("Idle")
+    m.state("Idle")
+    m.state("Scanning", do="Scan", bindings="area = area")
+    m.transition("Idle", "Scanning", "go")
+    m.transition("Scanning", "Idle", "succeeded")
+    kit.member(
+        "Drone",
+        machine=m,
+        parts={"camera": "Camera"},
+        data={"area": ("Area", None), "found": ("Area[*]", None)},
+    )
+    kit.swarm("Team", {"Drone": 1})
+    text = kit.xmi()
+    point = re.search(
+        r'<packagedElement xmi:type="uml:DataType" xmi:id="([^"]+)" name="Point3">', text
+    )
+    assert point is not None
+    stereo = (
+        f'  <CPSwarm:RosMessage xmi:id="_rosmsg" base_DataType="{point.group(1)}"'
+        ' rosType="geometry_msgs/msg/Point"/>\n'
+    )
+    path = tmp_path / "survey.xmi"
+    path.write_text(text.replace("</xmi:XMI>", stereo + "</xmi:XMI>"), encoding="utf-8")
+    return path
+
+
+def test_private_actions_carry_data_types_as_messages(tmp_path: Path) -> None:
+    """Nested data types become nested messages, sequences arrays of them, enumerations
+    strings, a «RosMessage» its own type (a dependency); renamed keys are in the spec."""
+    result = pipeline.compile_model(survey_model(tmp_path), backends=["rclpy"])
+    assert not pipeline.dg.has_errors(result.validation.diagnostics)
+    files = {str(p): t for p, t in result.files.items()}
+    root = "rclpy/survey_interfaces"
+    assert sorted(f for f in files if f.startswith(f"{root}/msg/")) == [
+        f"{root}/msg/{n}.msg" for n in ("ActiveStates", "Area", "Event", "Pose")
+    ]
+    area = [x for x in files[f"{root}/msg/Area.msg"].splitlines() if not x.startswith("#")]
+    assert area == [
+        "survey_interfaces/Pose centre",
+        "survey_interfaces/Pose[] corners",
+        "string mode",
+        "int64 tag_id",
+        "geometry_msgs/Point peak",
+        "string[] tags",
+    ]
+    pose = [x for x in files[f"{root}/msg/Pose.msg"].splitlines() if not x.startswith("#")]
+    assert pose == ["float64 x", "float64 y"]
+    scan = files[f"{root}/action/Scan.action"].splitlines()
+    assert scan[1:4] == ["survey_interfaces/Area area", "---", "survey_interfaces/Area[] found"]
+    assert "<depend>geometry_msgs</depend>" in files[f"{root}/package.xml"]
+    assert "find_package(geometry_msgs REQUIRED)" in files[f"{root}/CMakeLists.txt"]
+    assert "<exec_depend>geometry_msgs</exec_depend>" in files["rclpy/survey_nodes/package.xml"]
+    drone = files["rclpy/survey_nodes/survey_nodes/drone.py"]
+    renames = '(("tagId", "tag_id", ()),)'
+    assert f'Field("area", "area", "survey_interfaces/Area", {renames})' in drone
+    assert f'Field("found", "found", "survey_interfaces/Area[]", {renames})' in drone
+
+
+def test_data_messages_give_way_to_actions_and_reserved_names() -> None:
+    """A data type named like an action or Event takes a number; the actions keep theirs."""
+    from swarmgen.backends.rclpy_messages import data_messages, declared_message
+
+    result = pipeline.compile_model(DISPATCH, backends=["rclpy"])
+    assert result.validation.model is not None
+    found = data_messages(result.validation.model, "pkg", ["Zone"], {"Pose", "Event"})
+    assert found.types == {"Pose": "pkg/Pose2", "Zone": "pkg/Zone"}
+    assert sorted(found.texts) == ["Pose2", "Zone"]
+    assert "pkg/Pose2 centre" in found.texts["Zone"]
+    assert declared_message("geometry_msgs/msg/Point") == "geometry_msgs/Point"
+    assert declared_message("geometry_msgs/Point") == "geometry_msgs/Point"
+    for bad in ("Geo/msg/Point", "a/srv/B", "x/point", "a;b/C", ""):
+        assert declared_message(bad) is None, bad
 
 
 # --- replay on real rclpy

@@ -428,3 +428,99 @@ def test_events_and_action_across_two_processes(installed: dict[str, Any], tmp_p
             server.communicate()
     _check_client(client_result)
     _check_server(server_result)
+
+
+AREA = {
+    "centre": {"x": 1.5, "y": -2.0},
+    "corners": [{"x": 0.0, "y": 1.0}, {"x": 2.0, "y": 3.0}],
+    "mode": "track",
+    "tagId": 7,
+    "peak": {"x": 1.0, "y": 2.0, "z": 30.5},
+    "tags": ["north", "ünïcode"],
+}
+DATA_SCRIPT = r"""
+import json
+import time
+
+import rclpy
+from rclpy.action import ActionClient, ActionServer
+from rclpy.executors import SingleThreadedExecutor
+from survey_interfaces.action import Scan
+
+from swarmgen.ros.runtime.messages import decode, encode, fits
+from swarmgen.ros.runtime.spec import Field
+
+RENAMES = (("tagId", "tag_id", ()),)
+AREA = Field("area", "area", "survey_interfaces/Area", RENAMES)
+FOUND = Field("found", "found", "survey_interfaces/Area[]", RENAMES)
+VALUE = @VALUE@
+
+
+def spin_until(executor, future):
+    deadline = time.monotonic() + 20
+    while not future.done() and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.1)
+    return future.result()
+
+
+def execute(handle):
+    present, area = decode(AREA.type, handle.request.area)
+    handle.succeed()
+    found = encode(FOUND.type, [area, {"tagId": 9}])
+    return Scan.Result(found=found, outcome="succeeded" if present else "absent")
+
+
+def main():
+    rclpy.init()
+    node = rclpy.create_node("k3_data")
+    ActionServer(node, Scan, "scan", execute)
+    client = ActionClient(node, Scan, "scan")
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    deadline = time.monotonic() + 20
+    while not client.server_is_ready() and time.monotonic() < deadline:
+        executor.spin_once(timeout_sec=0.1)
+    handle = spin_until(executor, client.send_goal_async(Scan.Goal(area=encode(AREA.type, VALUE))))
+    result = spin_until(executor, handle.get_result_async()).result
+    present, found = decode(FOUND.type, result.found)
+    print(json.dumps({
+        "outcome": result.outcome,
+        "found": found,
+        "fits": fits(AREA.type, VALUE),
+        "partial_fits": fits(AREA.type, {"mode": "track"}),
+        "bad_fits": fits(AREA.type, {**VALUE, "tagId": "seven"}),
+        "zero_present": decode(AREA.type, encode(AREA.type, None))[0],
+        "bad_is_zero": decode(AREA.type, encode(AREA.type, {"tagId": "x"}))[0],
+    }))
+    node.destroy_node()
+    rclpy.shutdown()
+
+
+main()
+"""
+
+
+def test_data_types_travel_as_messages(tmp_path: Path) -> None:
+    """A private action of a model whose data types nest (and use a «RosMessage» type): the
+    generated package builds, and a goal with nested values comes back field for field."""
+    need_rclpy()
+    from swarmgen import pipeline
+    from tests.test_rclpy_backend import survey_model
+
+    result = pipeline.compile_model(survey_model(tmp_path), backends=["rclpy"])
+    prefix = PurePosixPath("rclpy/survey_interfaces")
+    files = {p.relative_to(prefix): t for p, t in result.files.items() if p.is_relative_to(prefix)}
+    build_and_install(_write(files, tmp_path / "survey_interfaces"))
+    script = tmp_path / "data_roundtrip.py"
+    script.write_text(DATA_SCRIPT.replace("@VALUE@", repr(AREA)), encoding="utf-8")
+    env = _ros_env(tmp_path)
+    env["PYTHONPATH"] = str(Path(__file__).resolve().parents[1])
+    found = _output(_start(script, "both", env))
+    zero_area = {
+        "centre": {"x": 0.0, "y": 0.0}, "corners": [], "mode": "", "tagId": 9,
+        "peak": {"x": 0.0, "y": 0.0, "z": 0.0}, "tags": [],
+    }  # fmt: skip
+    assert found["outcome"] == "succeeded"
+    assert found["found"] == [AREA, zero_area]
+    assert found["fits"] and not found["partial_fits"] and not found["bad_fits"]
+    assert not found["zero_present"] and not found["bad_is_zero"]

@@ -37,6 +37,7 @@ from swarmgen.backends.rclpy_declared import (
     exec_depends,
     user_packages,
 )
+from swarmgen.backends.rclpy_messages import DataMessages, camel, data_messages
 from swarmgen.backends.rclpy_parameters import (
     FieldView,
     field_type,
@@ -48,7 +49,7 @@ from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.generated import header, markdown_cell
 from swarmgen.ir.nodes import Model
 from swarmgen.ir.query import composition as swarm_composition
-from swarmgen.names import doc_text, identifier, one_line, ros_name
+from swarmgen.names import doc_text, one_line, ros_name
 from swarmgen.render import render
 from swarmgen.ros.idl_index import InterfaceIndex
 from swarmgen.ros.interfaces import (
@@ -83,6 +84,7 @@ ROS_RUNTIME_MODULES = (
     "replay",
 )
 _RESERVED_TYPES = ("Event", "ActiveStates")
+_NO_MESSAGES = DataMessages()
 # Module names double as executables and as launcher options (`--uav 2`): keep them clear of
 # the package's other modules and of the launcher's own options.
 _RESERVED_MODULES = (
@@ -119,12 +121,6 @@ def is_relative_ros_name(name: str) -> bool:
     return all(_ROS_TOKEN.fullmatch(t) and "__" not in t for t in tokens)
 
 
-def _camel(name: str) -> str:
-    parts = re.split(r"[^0-9A-Za-z]+", identifier(name))
-    text = "".join(p[:1].upper() + p[1:] for p in parts if p)
-    return text if text[:1].isalpha() else f"B{text}"
-
-
 @dataclass(frozen=True)
 class BehaviourView:
     """A behaviour as the rclpy backend renders it: its action, ROS name and fields."""
@@ -137,6 +133,7 @@ class BehaviourView:
     note: str  # why the action name differs from the declared rosName ("" if it does not)
     declared: Declared | None = None  # runs on its declared type (no private action)
     enumerations: frozenset[str] = frozenset()  # the model's enumeration names
+    messages: DataMessages = _NO_MESSAGES  # the model's data types as messages
 
     @property
     def runs_as(self) -> str:
@@ -152,6 +149,7 @@ class BehaviourView:
             [(f.field, f.model_type) for f in self.inputs],
             [(f.field, f.model_type) for f in self.outputs],
             self.enumerations,
+            self.messages.types,
         )
 
     def spec(self) -> str:
@@ -163,7 +161,11 @@ class BehaviourView:
         )
 
         def fields(items: tuple[FieldView, ...]) -> str:
-            inner = "".join(f"Field({f.name!r}, {f.field!r}, {f.type!r}), " for f in items)
+            inner = "".join(
+                f"Field({f.name!r}, {f.field!r}, {f.type!r}"
+                f"{f', {f.renames!r}' if f.renames else ''}), "
+                for f in items
+            )
             return f"({inner})"
 
         if self.declared is not None:  # no private action: its fields are the binding's
@@ -182,10 +184,13 @@ def behaviour_views(
     charts: tuple[Chart, ...],
     bound: dict[str, Declared] | None = None,
     enumerations: frozenset[str] = frozenset(),
+    messages: DataMessages | None = None,
 ) -> dict[str, BehaviourView]:
     """Every behaviour the charts run, by model name, with its action type, name and fields,
     and its binding when it runs on its declared type (`bound`, by model name);
-    `enumerations` (the model's) travel as strings, sequences as arrays (`field_type`)."""
+    `enumerations` (the model's) travel as strings, sequences as arrays (`field_type`), data
+    types as the messages of `messages` (None: as JSON)."""
+    messages = messages or _NO_MESSAGES
     bound = bound or {}
     infos: dict[str, BehaviourInfo] = {}
     for chart in charts:
@@ -196,7 +201,7 @@ def behaviour_views(
     views = {}
     for name in sorted(infos):
         info = infos[name]
-        action = _camel(info.ident or info.name)
+        action = camel(info.ident or info.name)
         candidate, n = action, 2
         while candidate in types:
             candidate, n = f"{action}{n}", n + 1
@@ -218,10 +223,20 @@ def behaviour_views(
         names.add(action_name)
         in_taken: set[str] = set()
         out_taken: set[str] = {"outcome"}
-        inputs = tuple(field_view(info, p, in_taken, enumerations) for p in info.inputs)
-        outputs = tuple(field_view(info, p, out_taken, enumerations) for p in info.outputs)
+        inputs = tuple(field_view(info, p, in_taken, enumerations, messages) for p in info.inputs)
+        outputs = tuple(
+            field_view(info, p, out_taken, enumerations, messages) for p in info.outputs
+        )
         views[name] = BehaviourView(
-            info, candidate, action_name, inputs, outputs, note, bound.get(name), enumerations
+            info,
+            candidate,
+            action_name,
+            inputs,
+            outputs,
+            note,
+            bound.get(name),
+            enumerations,
+            messages,
         )
     return views
 
@@ -242,10 +257,11 @@ class RclpyBackend:
         names = sorted({info.name for chart in charts for info in chart.behaviours})
         own = (interfaces_package(model), nodes_package(model))
         declared = declared_bindings(model, names, self.interfaces, own)
-        views = behaviour_views(charts, declared, frozenset(e.name for e in model.enumerations))
+        views = private_views(model, charts, declared)
         view = package_view(model, charts)
         listed = ("action_msgs", "builtin_interfaces", "rcl_interfaces")  # package.xml.j2's
-        view["depends"] = exec_depends(declared.values(), (*own, *listed))
+        used = next(iter(views.values())).messages.packages(own) if views else set()
+        view["depends"] = sorted({*exec_depends(declared.values(), (*own, *listed)), *used})
         files = interface_files(model, views)
         packages = user_packages(declared.values(), self.interfaces) if self.interfaces else {}
         view["user_packages"] = sorted(packages)
@@ -255,6 +271,20 @@ class RclpyBackend:
         files.update(package_files(model, charts, view))
         files[PurePosixPath("README.md")] = readme(model, views, view)
         return files
+
+
+def private_views(
+    model: Model, charts: tuple[Chart, ...], declared: dict[str, Declared]
+) -> dict[str, BehaviourView]:
+    """`behaviour_views` with the data types of the private actions as messages, named after
+    the actions (which keep their names: the messages give way on a collision)."""
+    enums = frozenset(e.name for e in model.enumerations)
+    first = behaviour_views(charts, declared, enums)
+    private = [v for v in first.values() if v.declared is None]
+    used = [t for v in private for _, t in (*v.info.inputs, *v.info.outputs)]
+    taken = {*_RESERVED_TYPES, *(v.action for v in private)}
+    messages = data_messages(model, interfaces_package(model), used, taken)
+    return behaviour_views(charts, declared, enums, messages)
 
 
 def package_view(model: Model, charts: tuple[Chart, ...]) -> dict[str, Any]:
@@ -289,9 +319,10 @@ def interface_files(model: Model, views: dict[str, BehaviourView]) -> Files:
     """`<swarm>_interfaces/`: the messages and one action per behaviour."""
     interfaces = interfaces_package(model)
     description = one_line(f"ROS 2 interfaces of swarm {model.name} (generated by swarmgen)")
+    messages = next(iter(views.values())).messages.texts if views else {}
     rendered = render_interface_package(
         interfaces,
-        {"Event": EVENT_MSG, "ActiveStates": ACTIVE_STATES_MSG},
+        {"Event": EVENT_MSG, "ActiveStates": ACTIVE_STATES_MSG, **messages},
         {v.action: v.action_text for v in views.values() if v.declared is None},
         description,
     )

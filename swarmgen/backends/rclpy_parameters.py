@@ -11,20 +11,30 @@ from dataclasses import dataclass
 from typing import Any
 
 from swarmgen.backends.pyrender import py_literal
+from swarmgen.backends.rclpy_messages import DataMessages, field_name
 from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.ir.primitives import primitive
 from swarmgen.names import IdAllocator, ros_name
-from swarmgen.ros.interfaces import check_field_name, interface_type
+from swarmgen.ros.idl_bind import Renames
+from swarmgen.ros.interfaces import interface_type
+
+_NO_MESSAGES: Mapping[str, str] = {}
 
 
 def field_type(
-    type_name: str | None, many: bool = False, enumerations: Collection[str] = ()
+    type_name: str | None,
+    many: bool = False,
+    enumerations: Collection[str] = (),
+    messages: Mapping[str, str] = _NO_MESSAGES,
 ) -> str:
     """How a value of a model type travels in a ROS field of the private action: float64,
-    int64, bool, string, enum (a string field holding the literal's name), an array of these
-    for a sequence (`float64[]`; `string[]` of literals), or json (a string field carrying
-    JSON: data types such as Pose, untyped values, and sequences of either)."""
+    int64, bool, string, enum (a string field holding the literal's name), a message of a
+    data type (`messages`: model type -> `swarm_interfaces/Pose`), an array of these for a
+    sequence (`float64[]`; `string[]` of literals), or json (a string field carrying JSON:
+    data types without a message, untyped values, and sequences of either)."""
+    if type_name is not None and type_name in messages:
+        return f"{messages[type_name]}{'[]' if many else ''}"
     if many:
         element = field_type(type_name, False, enumerations)
         if element == "json":
@@ -37,19 +47,6 @@ def field_type(
     return interface_type(type_name)
 
 
-def _field_name(name: str, taken: set[str]) -> str:
-    base = ros_name(name)
-    for candidate in (base, f"{base}_value", *(f"{base}_{n}" for n in range(2, 100))):
-        try:
-            check_field_name(candidate)
-        except ValueError:
-            continue
-        if candidate not in taken:
-            taken.add(candidate)
-            return candidate
-    raise ValueError(f"no ROS field name for {name!r}")
-
-
 @dataclass(frozen=True)
 class FieldView:
     """One behaviour argument or output as a field of its ROS action."""
@@ -58,6 +55,7 @@ class FieldView:
     field: str  # ROS field name
     type: str  # float64, int64, bool, string, enum, json, or an array `float64[]` (`field_type`)
     model_type: str | None  # `T[]` for a sequence of T (as `interfaces.interface_type` reads it)
+    renames: Renames = ()  # a data type's keys its message's fields spell otherwise
 
 
 def field_view(
@@ -65,13 +63,17 @@ def field_view(
     parameter: tuple[str, str | None],
     taken: set[str],
     enumerations: frozenset[str],
+    messages: DataMessages | None = None,
 ) -> FieldView:
-    """One input or output of a private action: its field name and how its value travels."""
+    """One input or output of a private action: its field name and how its value travels
+    (a data type of `messages` as its message, with its renames)."""
     ident, type_ = parameter
     many = ident in info.sequences
     model_type = f"{type_ or ''}[]" if many else type_
-    kind = field_type(type_, many, enumerations)
-    return FieldView(ident, _field_name(ident, taken), kind, model_type)
+    types = messages.types if messages is not None else _NO_MESSAGES
+    kind = field_type(type_, many, enumerations, types)
+    renames = messages.renames.get(type_ or "", ()) if messages is not None else ()
+    return FieldView(ident, field_name(ident, taken), kind, model_type, renames)
 
 
 def parameter_type(

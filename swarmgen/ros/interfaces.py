@@ -15,8 +15,10 @@ Integer, Int, Long, UnlimitedNatural       int64        UnlimitedNatural's `*` i
 Boolean, Bool                              bool
 String, no type (None)                     string
 an enumeration (`enumerations`)            string       the literal's name
-anything else (a DataType such as `Pose`)  string       the value travels as JSON text
-a sequence `T[]` of a primitive or enum    `F[]`        `F` the element's field type
+a DataType in `messages` (`Pose`)          `pkg/Pose`   the message `messages` names for it
+anything else                              string       the value travels as JSON text
+a sequence `T[]` of a primitive, enum, or  `F[]`        `F` the element's field type
+  a DataType in `messages`
 a sequence `T[]` of anything else          string       the whole list as one JSON text
 =========================================  ===========  ========================================
 
@@ -80,6 +82,7 @@ string member
 string[] states
 """
 
+_NO_MESSAGES: Mapping[str, str] = {}
 _TYPES = {
     Primitive.REAL: "float64",
     Primitive.INTEGER: "int64",
@@ -88,18 +91,25 @@ _TYPES = {
 }
 
 
-def interface_type(type_name: str | None, enumerations: Collection[str] = ()) -> str:
+def interface_type(
+    type_name: str | None,
+    enumerations: Collection[str] = (),
+    messages: Mapping[str, str] = _NO_MESSAGES,
+) -> str:
     """The ROS IDL field type for a model type (see the table in the module docstring).
 
     A type name ending in `[]` is a sequence of that type: an array of the element's field
-    type when it is a primitive or one of `enumerations`, else one `string` of JSON text.
+    type when it is a primitive, one of `enumerations` or a data type of `messages` (model
+    type name -> message field type, `swarm_interfaces/Pose`), else one `string` of JSON text.
     """
     name = (type_name or "").strip()
     if name.endswith("[]"):
         element = name[:-2]
-        if primitive(element) is not None or element in enumerations:
-            return f"{interface_type(element, enumerations)}[]"
+        if primitive(element) is not None or element in enumerations or element in messages:
+            return f"{interface_type(element, enumerations, messages)}[]"
         return "string"
+    if name in messages:
+        return messages[name]
     kind = primitive(name)
     return "string" if kind is None else _TYPES[kind]
 
@@ -109,6 +119,7 @@ def _fields(
     fields: Sequence[tuple[str, str | None]],
     taken: set[str],
     enumerations: Collection[str],
+    messages: Mapping[str, str],
 ) -> list[str]:
     lines = []
     for raw_name, type_name in fields:
@@ -116,7 +127,7 @@ def _fields(
         if name in taken:
             raise ValueError(f"duplicate field {name!r} in the action's {section}")
         taken.add(name)
-        lines.append(f"{interface_type(type_name, enumerations)} {name}")
+        lines.append(f"{interface_type(type_name, enumerations, messages)} {name}")
     return lines
 
 
@@ -124,17 +135,18 @@ def behaviour_action(
     inputs: Sequence[tuple[str, str | None]],
     outputs: Sequence[tuple[str, str | None]],
     enumerations: Collection[str] = (),
+    messages: Mapping[str, str] = _NO_MESSAGES,
 ) -> str:
     """The .action text of a behaviour: goal = `inputs`, result = `outputs` + `string outcome`,
     feedback = `string status`.
 
     Each field is `(name, model type)` (`T[]` for a sequence; `enumerations` names the model's
-    enumerations, `interface_type`); names are lower-cased and must then be valid ROS field
+    enumerations, `messages` its data types' messages: `interface_type`); names are lower-cased and must then be valid ROS field
     names (ValueError otherwise, also for duplicates and for an output named `outcome`).
     """
-    goal = _fields("goal", inputs, set(), enumerations)
+    goal = _fields("goal", inputs, set(), enumerations, messages)
     result_names: set[str] = set()
-    result = _fields("result", outputs, result_names, enumerations)
+    result = _fields("result", outputs, result_names, enumerations, messages)
     if "outcome" in result_names:
         raise ValueError(
             "an action output may not be named 'outcome' (it is added to every result)"

@@ -13,6 +13,8 @@ from typing import Any
 from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from .convert import ConversionError, nested_class, plain, renamed, to_message
+
 SWARM_TOPIC = "/swarm/events"
 LOCAL_TOPIC = "local_events"  # behaviour events of local scope, inside one member's namespace
 STATES_TOPIC = "active_states"
@@ -30,15 +32,44 @@ STATES_QOS = QoSProfile(
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
+# Message field type (`pkg/Pose`) -> the renames of its model keys (`Field.renames`, registered
+# by the member module's specs): one data type per message, so one table per message type.
+_RENAMES: dict[str, tuple[Any, ...]] = {}
+
+
+def use_renames(type_: str, renames: tuple[Any, ...]) -> None:
+    """Model keys that the message `type_` (`pkg/Pose`, or `pkg/Pose[]`) names otherwise."""
+    if renames:
+        _RENAMES[type_.removesuffix("[]")] = renames
+
+
+def _message_class(type_: str) -> Any:
+    package, name = type_.split("/")
+    return nested_class((package, "msg"), name)
+
+
+def _to_message(type_: str, value: Any) -> Any:
+    """A message of `type_` from a model value (ConversionError if it cannot hold it)."""
+    return to_message(_message_class(type_), renamed(value, _RENAMES.get(type_, ()), True), type_)
+
+
+def _from_message(type_: str, message: Any) -> Any:
+    return renamed(plain(message), _RENAMES.get(type_, ()), False)
 
 
 def encode(type_: str, value: Any) -> Any:
     """A Python value as the ROS field of `type_` holds it (lenient: unusable values give the
     field's zero value; JSON and enumeration fields give `""` for a value that is absent; an
-    array field `T[]` takes a list item by item)."""
+    array field `T[]` takes a list item by item; a message field `pkg/Name` a dict, renamed by
+    `use_renames`, or its zeros message when the dict does not fit)."""
     if type_.endswith("[]"):
         items = value if isinstance(value, list | tuple) else ()
         return [encode(type_[:-2], item) for item in items]
+    if "/" in type_:  # a message: a data type's value, or its zeros when it cannot be one
+        try:
+            return _to_message(type_, {} if value is None else value)
+        except ConversionError:
+            return _message_class(type_)()
     if type_ == "json":
         return "" if value is None else json.dumps(value, default=str, sort_keys=True)
     if type_ in ("string", "enum"):
@@ -61,6 +92,11 @@ def fits(type_: str, value: Any) -> bool:
         return True
     if type_.endswith("[]"):
         return isinstance(value, list | tuple) and all(fits(type_[:-2], v) for v in value)
+    if "/" in type_:  # every field given, each as its field holds it: the value round-trips
+        try:
+            return bool(_from_message(type_, _to_message(type_, value)) == value)
+        except ConversionError:
+            return False
     if type_ == "enum":
         return isinstance(value, str)
     if type_ == "bool":
@@ -73,9 +109,12 @@ def fits(type_: str, value: Any) -> bool:
 
 def decode(type_: str, value: Any) -> tuple[bool, Any]:
     """(present, value) of a ROS field; an empty JSON or enumeration field is absent (no
-    literal is empty: the output's zero, the first literal, is written instead)."""
+    literal is empty: the output's zero, the first literal, is written instead), and so is a
+    message equal to its zeros (its value is still the plain dict)."""
     if type_.endswith("[]"):  # rclpy gives numeric arrays as array.array
         return True, [decode(type_[:-2], item)[1] for item in value]
+    if "/" in type_:  # the zeros message is "not given": the output's zero is written instead
+        return value != type(value)(), _from_message(type_, value)
     if type_ == "json":
         if value == "":
             return False, None

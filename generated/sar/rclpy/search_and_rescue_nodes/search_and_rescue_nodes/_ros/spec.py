@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from .._runtime.chart import Chart
+from .messages import use_renames
 
 
 @dataclass(frozen=True, slots=True)
@@ -17,13 +18,19 @@ class Field:
     `type` is the ROS field type (`float64`, `int64`, `bool`, `string`), `enum` (a `string`
     field holding a literal's name; empty: not given), an array of one of these (`float64[]`,
     `string[]` for enumerations: a model sequence) or `json`: a `string` field carrying the
-    JSON text of a value of a model DataType (`Pose`), of no declared type, or of a sequence
-    of either.
+    JSON text of a value of no declared type or a sequence of them, or a message of the
+    interface package (`swarm_interfaces/Pose`, an array `swarm_interfaces/Pose[]`): a model
+    DataType. `renames` are its model keys that the message's fields name otherwise
+    (`(("posX", "pos_x", ()),)`, nested: the third item), registered for the message type.
     """
 
     name: str
     field: str
     type: str
+    renames: tuple[tuple[str, str, tuple[Any, ...]], ...] = ()
+
+    def __post_init__(self) -> None:
+        use_renames(self.type, self.renames)
 
 
 @dataclass(frozen=True, slots=True)
