@@ -464,9 +464,9 @@ def spin_until(executor, future):
 
 
 def execute(handle):
-    present, area = decode(AREA.type, handle.request.area)
+    present, area = decode(AREA.type, handle.request.area, AREA.renames)
     handle.succeed()
-    found = encode(FOUND.type, [area, {"tagId": 9}])
+    found = encode(FOUND.type, [area, {"tagId": 9}], FOUND.renames)
     return Scan.Result(found=found, outcome="succeeded" if present else "absent")
 
 
@@ -480,17 +480,17 @@ def main():
     deadline = time.monotonic() + 20
     while not client.server_is_ready() and time.monotonic() < deadline:
         executor.spin_once(timeout_sec=0.1)
-    handle = spin_until(executor, client.send_goal_async(Scan.Goal(area=encode(AREA.type, VALUE))))
+    handle = spin_until(executor, client.send_goal_async(Scan.Goal(area=encode(AREA.type, VALUE, AREA.renames))))
     result = spin_until(executor, handle.get_result_async()).result
-    present, found = decode(FOUND.type, result.found)
+    present, found = decode(FOUND.type, result.found, FOUND.renames)
     print(json.dumps({
         "outcome": result.outcome,
         "found": found,
-        "fits": fits(AREA.type, VALUE),
-        "partial_fits": fits(AREA.type, {"mode": "track"}),
-        "bad_fits": fits(AREA.type, {**VALUE, "tagId": "seven"}),
-        "zero_present": decode(AREA.type, encode(AREA.type, None))[0],
-        "bad_is_zero": decode(AREA.type, encode(AREA.type, {"tagId": "x"}))[0],
+        "fits": fits(AREA.type, VALUE, AREA.renames),
+        "partial_fits": fits(AREA.type, {"mode": "track"}, AREA.renames),
+        "bad_fits": fits(AREA.type, {**VALUE, "tagId": "seven"}, AREA.renames),
+        "zero_present": decode(AREA.type, encode(AREA.type, None, AREA.renames), AREA.renames)[0],
+        "bad_is_zero": decode(AREA.type, encode(AREA.type, {"tagId": "x"}, AREA.renames), AREA.renames)[0],
     }))
     node.destroy_node()
     rclpy.shutdown()

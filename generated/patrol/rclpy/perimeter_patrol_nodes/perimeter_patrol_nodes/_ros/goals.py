@@ -149,7 +149,7 @@ class GoalClient(Node):
         if item is None:
             goal_type = self.interfaces.action(behaviour.action).Goal
             goal = goal_type(
-                **{f.field: encode(f.type, args.get(f.name)) for f in behaviour.inputs}
+                **{f.field: encode(f.type, args.get(f.name), f.renames) for f in behaviour.inputs}
             )
         else:
             try:
@@ -260,7 +260,7 @@ class GoalClient(Node):
             return
         outputs: dict[str, Any] = {}
         for output in run.behaviour.outputs:
-            present, value = decode(output.type, getattr(result, output.field))
+            present, value = decode(output.type, getattr(result, output.field), output.renames)
             if present:
                 outputs[output.name] = value
         self._outcome(run, outcome, outputs)

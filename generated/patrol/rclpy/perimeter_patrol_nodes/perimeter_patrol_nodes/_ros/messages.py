@@ -33,15 +33,8 @@ STATES_QOS = QoSProfile(
     durability=DurabilityPolicy.TRANSIENT_LOCAL,
 )
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
-# Message field type (`pkg/Pose`) -> the renames of its model keys (`Field.renames`, registered
-# by the member module's specs): one data type per message, so one table per message type.
-_RENAMES: dict[str, tuple[Any, ...]] = {}
-
-
-def use_renames(type_: str, renames: tuple[Any, ...]) -> None:
-    """Model keys that the message `type_` (`pkg/Pose`, or `pkg/Pose[]`) names otherwise."""
-    if renames:
-        _RENAMES[type_.removesuffix("[]")] = renames
+# A field's renames (`Field.renames`): (model key, ROS field, renames inside), nested.
+Renames = tuple[tuple[str, str, tuple[Any, ...]], ...]
 
 
 def _message_class(type_: str) -> Any:
@@ -49,26 +42,27 @@ def _message_class(type_: str) -> Any:
     return nested_class((package, "msg"), name)
 
 
-def _to_message(type_: str, value: Any) -> Any:
+def _to_message(type_: str, value: Any, renames: Renames) -> Any:
     """A message of `type_` from a model value (ConversionError if it cannot hold it)."""
-    return to_message(_message_class(type_), renamed(value, _RENAMES.get(type_, ()), True), type_)
+    return to_message(_message_class(type_), renamed(value, renames, True), type_)
 
 
-def _from_message(type_: str, message: Any) -> Any:
-    return renamed(plain(message), _RENAMES.get(type_, ()), False)
+def _from_message(type_: str, message: Any, renames: Renames) -> Any:
+    """The model value of a message: its plain dict with the model's keys."""
+    return renamed(plain(message), renames, False)
 
 
-def encode(type_: str, value: Any) -> Any:
+def encode(type_: str, value: Any, renames: Renames = ()) -> Any:
     """A Python value as the ROS field of `type_` holds it (lenient: unusable values give the
     field's zero value; JSON and enumeration fields give `""` for a value that is absent; an
     array field `T[]` takes a list item by item; a message field `pkg/Name` a dict, renamed by
-    `use_renames`, or its zeros message when the dict does not fit)."""
+    `renames` (the field's, `Field.renames`), or its zeros message when the dict does not fit)."""
     if type_.endswith("[]"):
         items = value if isinstance(value, list | tuple) else ()
-        return [encode(type_[:-2], item) for item in items]
+        return [encode(type_[:-2], item, renames) for item in items]
     if "/" in type_:  # a message: a data type's value, or its zeros when it cannot be one
         try:
-            return _to_message(type_, {} if value is None else value)
+            return _to_message(type_, {} if value is None else value, renames)
         except ConversionError:
             return _message_class(type_)()
     if type_ == "json":
@@ -86,16 +80,17 @@ def encode(type_: str, value: Any) -> Any:
     raise ValueError(f"unknown field type {type_!r}")
 
 
-def fits(type_: str, value: Any) -> bool:
+def fits(type_: str, value: Any, renames: Renames = ()) -> bool:
     """`value` is one the ROS field of `type_` carries as it is (None: not given, the zero),
     not one `encode` would replace by the zero: what a behaviour's output must be."""
     if value is None or type_ in ("json", "string"):
         return True
     if type_.endswith("[]"):
-        return isinstance(value, list | tuple) and all(fits(type_[:-2], v) for v in value)
+        return isinstance(value, list | tuple) and all(fits(type_[:-2], v, renames) for v in value)
     if "/" in type_:  # every field given, each as its field holds it: the value round-trips
         try:
-            return bool(_from_message(type_, _to_message(type_, value)) == value)
+            message = _to_message(type_, value, renames)
+            return bool(_from_message(type_, message, renames) == value)
         except ConversionError:
             return False
     if type_ == "enum":
@@ -108,14 +103,14 @@ def fits(type_: str, value: Any) -> bool:
     return number and math.isfinite(float(value)) if type_ == "float64" else False
 
 
-def decode(type_: str, value: Any) -> tuple[bool, Any]:
+def decode(type_: str, value: Any, renames: Renames = ()) -> tuple[bool, Any]:
     """(present, value) of a ROS field; an empty JSON or enumeration field is absent (no
     literal is empty: the output's zero, the first literal, is written instead), and so is a
     message equal to its zeros (its value is still the plain dict)."""
     if type_.endswith("[]"):  # rclpy gives numeric arrays as array.array
-        return True, [decode(type_[:-2], item)[1] for item in value]
+        return True, [decode(type_[:-2], item, renames)[1] for item in value]
     if "/" in type_:  # the zeros message is "not given": the output's zero is written instead
-        return value != type(value)(), _from_message(type_, value)
+        return value != type(value)(), _from_message(type_, value, renames)
     if type_ == "json":
         if value == "":
             return False, None

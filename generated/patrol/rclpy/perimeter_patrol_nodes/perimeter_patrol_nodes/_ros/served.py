@@ -36,7 +36,10 @@ class Served:
     def inputs(self) -> dict[str, Any]:
         """The goal's inputs as model values."""
         request = self.handle.request
-        return {f.name: decode(f.type, getattr(request, f.field))[1] for f in self.behaviour.inputs}
+        return {
+            f.name: decode(f.type, getattr(request, f.field), f.renames)[1]
+            for f in self.behaviour.inputs
+        }
 
     def running(self) -> None:
         """The goal started (the private action's feedback)."""
@@ -47,10 +50,10 @@ class Served:
         result = self.action.Result(outcome=outcome)
         for output in self.behaviour.outputs:
             value = outputs.get(output.name)
-            if strict and not fits(output.type, value):
+            if strict and not fits(output.type, value, output.renames):
                 raise ValueError(f"output {output.name}: {value!r} is not a {output.type}")
             if output.name in outputs:
-                setattr(result, output.field, encode(output.type, value))
+                setattr(result, output.field, encode(output.type, value, output.renames))
         return result
 
     def failure(self) -> Any:

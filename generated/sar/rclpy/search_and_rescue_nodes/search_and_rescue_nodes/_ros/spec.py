@@ -8,7 +8,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from .._runtime.chart import Chart
-from .messages import use_renames
 
 
 @dataclass(frozen=True, slots=True)
@@ -21,16 +20,13 @@ class Field:
     JSON text of a value of no declared type or a sequence of them, or a message of the
     interface package (`swarm_interfaces/Pose`, an array `swarm_interfaces/Pose[]`): a model
     DataType. `renames` are its model keys that the message's fields name otherwise
-    (`(("posX", "pos_x", ()),)`, nested: the third item), registered for the message type.
+    (`(("posX", "pos_x", ()),)`, nested: the third item), passed to encode/decode.
     """
 
     name: str
     field: str
     type: str
     renames: tuple[tuple[str, str, tuple[Any, ...]], ...] = ()
-
-    def __post_init__(self) -> None:
-        use_renames(self.type, self.renames)
 
 
 @dataclass(frozen=True, slots=True)
