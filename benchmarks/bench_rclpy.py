@@ -40,10 +40,12 @@ SCRIPT = ROOT / "tests" / "fixtures" / "ros" / "sar_script.json"
 LAND_S = 1.5  # the script's Land duration: the mission ends that long after missionAbort
 
 
-def run(package_dir: Path, package: str, args: Any, scale: float, log: Path) -> dict[str, Any]:
+def run(
+    package_dir: Path, package: str, args: Any, scale: float, log: Path, prefix: Path
+) -> dict[str, Any]:
     ideal = (args.mission + LAND_S) * scale
     limit = int(60 + 5 * ideal)
-    env = harness.ros_env(log, domain_id=args.domain, python_path=[package_dir])
+    env = harness.ros_env(log, domain_id=args.domain, python_path=[package_dir], prefixes=[prefix])
     command = [
         "timeout", "-k", "5", str(limit), sys.executable, "-m", f"{package}.launch_swarm",
         "--uav", str(args.uav), "--ugv", str(args.ugv), "--script", str(SCRIPT),
@@ -101,11 +103,11 @@ def main() -> int:
         out = Path(tmp)
         pipeline.write_tree(result.files, out)
         started = time.monotonic()
-        harness.build_interfaces(out / "rclpy", model)
+        prefix = harness.build_interfaces(out / "rclpy", model)
         print(f"interfaces ready in {time.monotonic() - started:.1f} s (cached by hash)")
         package = nodes_package(model)
         for scale in (float(s) for s in args.scales.split(",")):
-            row = run(out / "rclpy" / package, package, args, scale, out / "roslog")
+            row = run(out / "rclpy" / package, package, args, scale, out / "roslog", prefix)
             rows.append(row)
             print(json.dumps(row), flush=True)
 

@@ -10,8 +10,10 @@ Interface packages: the swarm's own (`<swarm>_interfaces`) is installed into thi
 packages built from the user's definitions (`cpswarm_msgs`, beside it in `rclpy/`) go into a
 prefix per swarm, `<venv>/var/swarmgen/<swarm>/`, never into the venv: an installed copy would
 change what the next compile resolves, and two models may define one package differently (the
-samples' `cpswarm_msgs`). `ros_env` puts the prefixes built in this process on the subprocess's
-`PYTHONPATH`, `LD_LIBRARY_PATH` and `AMENT_PREFIX_PATH` (the latest first).
+samples' `cpswarm_msgs`). `build_interfaces` returns that prefix; `ros_env(prefixes=[...])` puts
+the prefixes it is given on the subprocess's `PYTHONPATH`, `LD_LIBRARY_PATH` and
+`AMENT_PREFIX_PATH` (in order, first wins). Nothing is remembered between calls: a caller
+passes the prefixes it built.
 """
 
 from __future__ import annotations
@@ -47,9 +49,6 @@ class RosRunError(SwarmgenError, RuntimeError):
     """A ROS subprocess failed or timed out."""
 
 
-_BUILT: list[Path] = []  # prefixes of user interface packages built by this process
-
-
 def user_prefix(model: Model) -> Path:
     """Where the swarm's user interface packages are installed (module docstring)."""
     return Path(sys.prefix) / "var" / "swarmgen" / swarm_name(model)
@@ -78,12 +77,12 @@ def ros_env(
     discovery: str = "LOCALHOST",
     python_path: Sequence[Path] = (),
     base: Mapping[str, str] | None = None,
-    prefixes: Sequence[Path] | None = None,
+    prefixes: Sequence[Path] = (),
 ) -> dict[str, str]:
     """The environment of a ROS 2 subprocess (see the module docstring); `prefixes`: the user
-    interface prefixes to use (None: those `build_interfaces` built in this process)."""
+    interface prefixes to put first (those `build_interfaces` returned; none by default)."""
     env = dict(os.environ if base is None else base)
-    prefix_env(list(reversed(_BUILT)) if prefixes is None else prefixes, env)
+    prefix_env(prefixes, env)
     env.pop("ROS_LOCALHOST_ONLY", None)  # ignored by Kilted; do not pretend it isolates
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery
     if domain_id is not None:
@@ -116,9 +115,6 @@ def build_interfaces(rclpy_dir: Path, model: Model) -> Path:
             build_and_install(package, prefix)
     except InterfaceBuildError as err:
         raise RosUnavailable(f"cannot build the ROS 2 interfaces: {err}") from None
-    if prefix in _BUILT:
-        _BUILT.remove(prefix)
-    _BUILT.append(prefix)
     return prefix
 
 

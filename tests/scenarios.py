@@ -56,14 +56,36 @@ ARITHMETIC = frozenset({"+", "-", "*", "/", "%"})
 OUTCOME_PREFIXES = ("outcome.", "done.invoke.")
 UNDECLARED_OUTCOME = "unplanned"  # an outcome no behaviour declares
 FAMILY_LIMIT = 40  # scenarios per family and chart at most
+UNSET_FIELD = 0.2  # chance a data type's field is left out of a generated value
 
 
-def _value(type_name: str | None, rng: random.Random) -> Any:
+def _value(type_name: str | None, rng: random.Random, template: Any = None) -> Any:
     if type_name in {"Integer", "Real"}:
         return rng.randint(0, 40) if type_name == "Integer" else round(rng.uniform(0, 40), 2)
     if type_name in _VALUES:
         return _VALUES[type_name]
+    if isinstance(template, dict):
+        return _shaped(template, rng)
     return {"x": rng.randint(0, 9), "y": rng.randint(0, 9)}  # a data type such as Pose
+
+
+def _shaped(template: dict[str, Any], rng: random.Random) -> dict[str, Any]:
+    """A data type's value in the shape of its initial value (the model's type, nested): its
+    numbers drawn, Booleans flipped at random, some fields left out (unset data, which every
+    backend fills from the type's initial value the same way)."""
+    value: dict[str, Any] = {}
+    for key, held in template.items():
+        if rng.random() < UNSET_FIELD:
+            continue
+        if isinstance(held, dict):
+            value[key] = _shaped(held, rng)
+        elif isinstance(held, bool):
+            value[key] = rng.random() < 0.5
+        elif isinstance(held, int | float):
+            value[key] = rng.randint(0, 9)
+        else:
+            value[key] = held
+    return value
 
 
 def _zero(type_name: str | None) -> Any:
@@ -429,11 +451,13 @@ class ScenarioMaker:
                     keys.append((event, (output,)))
         return keys
 
-    def _pick(self, keys: list[tuple[str, Path]], type_name: str | None, bias: float) -> Any:
+    def _pick(
+        self, keys: list[tuple[str, Path]], type_name: str | None, bias: float, template: Any
+    ) -> Any:
         options = self.values.candidates(keys, type_name)
         if options and self.rng.random() < bias:
             return self.rng.choice(options)
-        value = _value(type_name, self.rng)
+        value = _value(type_name, self.rng, template)
         if isinstance(value, dict):  # a data type: its fields from the guards, if any
             for name in value:
                 sub = self.values.candidates([(e, (*p, name)) for e, p in keys], "Real")
@@ -444,7 +468,10 @@ class ScenarioMaker:
     def event_step(self, name: str, bias: float = 0.5) -> Step:
         info = self.events.get(name)
         fields = info.fields if info else ()
-        data = {f: self._pick(self._event_keys(name, f), t, bias) for f, t in fields}
+        defaults = dict(info.defaults) if info else {}
+        data = {
+            f: self._pick(self._event_keys(name, f), t, bias, defaults.get(f)) for f, t in fields
+        }
         return {"event": name, "data": data}
 
     def event_variants(self, name: str) -> list[Step]:
@@ -469,8 +496,10 @@ class ScenarioMaker:
         assert node.call is not None
         info = self.behaviours[node.call.behaviour]
         chosen = outcome or self.rng.choice(info.outcomes)
+        initials = dict(info.output_initials)
         outputs = {
-            name: self._pick(self._output_keys(node, name), t, bias) for name, t in info.outputs
+            name: self._pick(self._output_keys(node, name), t, bias, initials.get(name))
+            for name, t in info.outputs
         }
         return {"complete": info.name, "state": node.id, "outcome": chosen, "outputs": outputs}
 

@@ -39,7 +39,11 @@ from search_and_rescue_swarm.behaviour_types import (
     CoverageBehaviour,
     CoverageRequest,
     CoverageResult,
+    Header,
+    Point,
     Pose,
+    PoseStamped,
+    Quaternion,
     TaskAllocationBehaviour,
     TaskAllocationRequest,
     TaskAllocationResult,
@@ -57,17 +61,21 @@ async def coverage(request: CoverageRequest, context: Context) -> CoverageResult
     _log(behaviour="Coverage", member=context.member_id, altitude=request.altitude,
          type=type(request.altitude).__name__)
     await asyncio.sleep(0.02)
-    context.emit("targetFound", {"target_id": 7, "pose": {"x": 1.5, "y": -2.0, "z": 0}}, "swarm")
+    where = {"header": {"frame_id": "map"}, "pose": {"position": {"x": 1.5, "y": -2.0, "z": 0}}}
+    context.emit("targetFound", {"target_id": 7, "pose": where}, "swarm")
     await asyncio.sleep(3600)  # until preempted
-    return CoverageResult("succeeded", target_id=7, target_pose=Pose(1.5, -2.0, 0.0))
+    found = Pose(Point(1.5, -2.0, 0.0), Quaternion(0.0, 0.0, 0.0, 1.0))
+    return CoverageResult("succeeded", target_id=7, target_pose=PoseStamped(Header("map"), found))
 
 
 async def task_allocation(
     request: TaskAllocationRequest, context: Context
 ) -> TaskAllocationResult:
     pose = request.target_pose
+    at = pose.pose.position
     _log(behaviour="TaskAllocation", target_id=request.target_id,
-         pose=[type(pose).__name__, pose.x, pose.y, pose.z, type(pose.z).__name__])
+         pose=[type(pose).__name__, pose.header.frame_id, at.x, at.y, at.z, type(at.z).__name__,
+               pose.pose.orientation.w])
     return TaskAllocationResult("succeeded", rover_id=2)
 
 
@@ -136,7 +144,8 @@ def run_swarm(package: Path, site: Path, log: Path, *args: str) -> tuple[object,
 
 def assert_mission(outcome: object, records: list[dict]) -> None:
     """Coverage ran typed (a float altitude), the target it reported reached TaskAllocation's
-    typed request (a Pose dataclass), whose outcome took the UAV to Tracking."""
+    typed request (nested PoseStamped dataclasses, the orientation the event did not give
+    filled with the model's default), whose outcome took the UAV to Tracking."""
     assert_clean(outcome, (0,))
     steps = [json.loads(line) for line in outcome.stdout.splitlines()]  # type: ignore[attr-defined]
     events = [step["event"] for step in steps]
@@ -148,7 +157,7 @@ def assert_mission(outcome: object, records: list[dict]) -> None:
     assert coverage["type"] == "float" and coverage["member"] == "1"
     allocation = next(r for r in records if r["behaviour"] == "TaskAllocation")
     assert allocation["target_id"] == 7, records
-    assert allocation["pose"] == ["Pose", 1.5, -2.0, 0.0, "float"], records
+    assert allocation["pose"] == ["PoseStamped", "map", 1.5, -2.0, 0.0, "float", 1.0], records
 
 
 def test_entry_points_provide_behaviours(package: Path, tmp_path: Path) -> None:
@@ -252,11 +261,11 @@ def test_generated_module_text(package: Path) -> None:
     text = (package / PACKAGE / "behaviour_types.py").read_text()
     assert f'GROUP = "{GROUP}"' in text
     assert 'outcome: Literal["succeeded", "aborted", "preempted", "targetLost"]' in text
-    assert "target_pose: Pose | None = None" in text
+    assert "target_pose: PoseStamped | None = None" in text
     assert (
         textwrap.dedent('''\
-        class Pose:
-            """Data type Pose."""
+        class Point:
+            """Data type Point."""
 
             x: float
         ''')

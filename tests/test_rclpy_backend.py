@@ -55,8 +55,9 @@ def compiled(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     pipeline.write_tree(result.files, out)
     model = result.validation.model
     assert model is not None
-    harness.build_interfaces(out / "rclpy", model)
+    prefix = harness.build_interfaces(out / "rclpy", model)
     return {
+        "prefix": prefix,
         "out": out,
         "rclpy": out / "rclpy",
         "model": model,
@@ -163,7 +164,9 @@ print(json.dumps(report))
 
 def test_generated_package_imports(compiled: dict[str, Any], tmp_path: Path) -> None:
     env = harness.ros_env(
-        tmp_path / "roslog", python_path=[compiled["rclpy"] / compiled["package"]]
+        tmp_path / "roslog",
+        python_path=[compiled["rclpy"] / compiled["package"]],
+        prefixes=[compiled["prefix"]],
     )
     done = subprocess.run(
         ["timeout", "-k", "5", "60", sys.executable, "-c", IMPORT_CHECK, compiled["package"]],

@@ -146,13 +146,20 @@ def test_sar_swarm_runs_on_the_declared_interfaces(sar: dict[str, Any], tmp_path
     assert by_topic["/uav_1/cmd/takeoff/goal"]["altitude"] == 1.5  # the member's data
     auction = by_topic["/uav_1/cmd/task_allocation_auction/goal"]
     assert auction["target_id"] == 101
-    assert auction["target_pose"] == {"x": 4.0, "y": 6.0, "z": 0.0}  # a Pose as a Point
+    _assert_found_pose(auction["target_pose"])  # the model's PoseStamped, field by field
     assert by_topic["/uav_1/cmd/task_allocation_auction/result"]["rover_id"] == 2
     move = by_topic[f"/{rover}/cmd/moveto/goal"]
-    assert move["target_pose"] == {"x": 4.0, "y": 6.0, "z": 0.0}
+    _assert_found_pose(move["target_pose"])  # move_base_msgs' own PoseStamped goal
     assert (f"/{rover}/cmd/moveto/goal", "move_base_msgs/action/MoveBase_Goal") in types
     assert (f"/{rover}/ugv_rescue/result", "cpswarm_msgs/action/Target_Result") in types
     print(f"setup {sar['setup_s']:.1f} s, mission {mission_s:.1f} s, {len(messages)} messages")
+
+
+def _assert_found_pose(pose: dict[str, Any]) -> None:
+    """A geometry_msgs/msg/PoseStamped as decoded from the bag, at the reported target."""
+    assert pose["header"]["frame_id"] == "map"
+    assert pose["pose"]["position"] == {"x": 4.0, "y": 6.0, "z": 0.0}
+    assert pose["pose"]["orientation"] == {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
 
 
 def test_launcher_refuses_a_missing_declared_type_in_one_line(

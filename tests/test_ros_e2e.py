@@ -160,9 +160,10 @@ def sar(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     assert result.files and model is not None
     out = tmp_path_factory.mktemp("sar_e2e")
     pipeline.write_tree(result.files, out)
-    harness.build_interfaces(out / "rclpy", model)
+    prefix = harness.build_interfaces(out / "rclpy", model)
     package = nodes_package(model)
     return {
+        "prefix": prefix,
         "root": out,
         "package": package,
         "interfaces": interfaces_package(model),
@@ -171,7 +172,9 @@ def sar(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
 
 
 def _env(sar: dict[str, Any], tmp_path: Path) -> dict[str, str]:
-    return harness.ros_env(tmp_path / "roslog", domain_id=DOMAIN, python_path=[sar["path"]])
+    return harness.ros_env(
+        tmp_path / "roslog", domain_id=DOMAIN, python_path=[sar["path"]], prefixes=[sar["prefix"]]
+    )
 
 
 def _leftovers(marker: str) -> list[str]:

@@ -58,7 +58,7 @@ def test_sar_uav_mission(uav: Path) -> None:
                 "done.invoke.Coverage.succeeded",
                 None,
             ),  # Coverage leaves only on the targetFound event
-            ("targetFound", {"target_id": 7, "pose": {"x": 1.0, "y": 2.0, "z": 0.0}}),
+            ("targetFound", {"target_id": 7, "pose": {"pose": {"position": {"x": 1.0, "y": 2.0}}}}),
             ("done.invoke.SelectRover.succeeded", {"rover_id": 3}),
             ("done.invoke.Coverage.succeeded", None),  # an outcome of another state is not ours
             ("done.invoke.Tracking.targetLost", None),
@@ -85,7 +85,10 @@ def test_sar_uav_mission(uav: Path) -> None:
     assert {"TargetMonitoring", "Positioning"} <= set(reports[3]["active"])  # parallel regions run
     data = reports[6]["data"]
     assert isinstance(data, dict)
-    assert data["target_id"] == 7 and data["rover_id"] == 3 and data["target_pose"]["y"] == 2.0
+    assert data["target_id"] == 7 and data["rover_id"] == 3
+    pose = data["target_pose"]  # the PoseStamped the event gave, filled by the value rule
+    assert pose["pose"]["position"] == {"x": 1.0, "y": 2.0, "z": 0.0}
+    assert pose["header"]["frame_id"] == "map" and pose["pose"]["orientation"]["w"] == 1.0
     final = reports[9]["data"]
     assert isinstance(final, dict) and final["target_id"] == 8  # output written back on the outcome
 

@@ -136,8 +136,11 @@ def test_replay_bags_are_read_by_rosbags_alone(replayed: dict[str, Any]) -> None
         stamps = [(e["stamp"]["sec"], e["stamp"]["nanosec"]) for e in events]
         assert stamps == [(n, 0) for n in range(1, 10)] + [(9, 1_000_000), (10, 0)]
         assert [e["sender"] for e in events][:2] == ["station", "replay"]
-        assert json.loads(events[3]["data"]) == {
-            "pose": {"x": 1.0, "y": 2.0, "z": 0.0},
+        assert json.loads(events[3]["data"]) == {  # as the scenario gives it
+            "pose": {
+                "header": {"frame_id": "map"},
+                "pose": {"position": {"x": 1.0, "y": 2.0, "z": 0.0}},
+            },
             "target_id": 7,
         }
         assert json.loads(events[4]["data"]) == {"rover_id": 3}
@@ -552,10 +555,10 @@ def test_live_rclpy_topics_are_recorded_raw(tmp_path: Path) -> None:
     model = result.validation.model
     assert result.files and model is not None
     pipeline.write_tree(result.files, tmp_path / "sar")
-    harness.build_interfaces(tmp_path / "sar" / "rclpy", model)
+    prefix = harness.build_interfaces(tmp_path / "sar" / "rclpy", model)
     package = interfaces_package(model)
     bag = tmp_path / "live"
-    env = harness.ros_env(tmp_path / "roslog", discovery="OFF")
+    env = harness.ros_env(tmp_path / "roslog", discovery="OFF", prefixes=[prefix])
     completed = subprocess.run(
         ["timeout", "-k", "5", "60", sys.executable, "-c", LIVE, package, str(bag)],
         capture_output=True,

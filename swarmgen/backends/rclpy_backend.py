@@ -29,8 +29,9 @@ from typing import Any
 from xml.sax.saxutils import escape
 
 from swarmgen.backends import Files, pycommon
-from swarmgen.backends.pycommon import common_view, member_view, script_specs
+from swarmgen.backends.pycommon import common_view, member_view, package_name, script_specs
 from swarmgen.backends.pyrender import ChartRenderer, format_python
+from swarmgen.backends.pytypes import MODULE, render_types
 from swarmgen.backends.rclpy_declared import (
     Declared,
     declared_bindings,
@@ -63,7 +64,9 @@ from swarmgen.ros.interfaces import (
 
 __all__ = ["RclpyBackend", "field_type", "interfaces_package", "member_modules", "nodes_package"]
 
-RUNTIME_MODULES = ("chart", "host", "configuration", "engine", "member", "replay", "args")
+RUNTIME_MODULES = (
+    "chart", "host", "configuration", "engine", "member", "replay", "args", "plugins",
+)  # fmt: skip
 ROS_RUNTIME_MODULES = (
     "spec",
     "messages",
@@ -80,6 +83,7 @@ ROS_RUNTIME_MODULES = (
     "servers",
     "simulated",
     "station",
+    "usercode",
     "launcher",
     "replay",
 )
@@ -90,6 +94,7 @@ _NO_MESSAGES = DataMessages()
 _RESERVED_MODULES = (
     "behaviours", "launch_swarm", "simulated_behaviours", "help", "h", "script", "time_scale",
     "station", "duration", "no_simulation", "trace", "events", "server_timeout",
+    "library", "no_plugins", "executor", MODULE,
 )  # fmt: skip
 # A relative ROS name: tokens of letters, digits and underscores (not leading digits), no `__`.
 _ROS_TOKEN = re.compile(r"^[A-Za-z][A-Za-z0-9_]*$")
@@ -357,6 +362,9 @@ def node_modules(
     behaviours = render("rclpy/behaviours.py.j2", **view, scripts=repr(script_specs(charts)))
     files[python / "behaviours.py"] = format_python(behaviours)
     files[python / "launch_swarm.py"] = format_python(render("rclpy/launch_swarm.py.j2", **view))
+    # the asyncio package's contract and entry-point group: one plug-in serves every backend
+    typed = render_types(model, charts, package_name(model), {**common, "runtime": "._runtime"})
+    files[python / f"{MODULE}.py"] = format_python(typed)
     files.update(runtime_files(python / "_runtime", RUNTIME_MODULES))
     files.update(ros_runtime_files(python / "_ros", ROS_RUNTIME_MODULES))
     return files

@@ -23,8 +23,11 @@ from swarmgen.ros.idl_bind import Binding, Renames, bind
 from swarmgen.ros.idl_index import InterfaceIndex
 from swarmgen.ros.interfaces import render_user_package
 
-# The parameter the runtime declares per service and topic binding (`bindings.resolve`).
+# The parameter the runtime declares per binding (`bindings.resolve`, `goals.py` for actions).
 TIMEOUT_PARAMETER = "behaviours.{key}.timeout_s"
+_MAX_DEPTH = 32
+# `enum_blanks`: a first literal, or (model key, blanks) pairs of a data type's fields
+Blanks = str | tuple[tuple[str, "Blanks"], ...]
 
 
 @dataclass(frozen=True)
@@ -36,6 +39,7 @@ class Declared:
     inputs: tuple[tuple[str, str], ...]  # (input identifier, field path)
     outputs: tuple[tuple[str, str], ...]  # (field path, output identifier)
     renames: tuple[tuple[str, str, Renames], ...] = ()  # (input|output, identifier, renames)
+    enums: tuple[tuple[str, Blanks], ...] = ()  # (output identifier, `enum_blanks`)
 
     @property
     def triple(self) -> tuple[str, str, str]:
@@ -50,14 +54,13 @@ class Declared:
             f"Binding(kind={b.kind!r}, type={self.triple!r}, ros_name={ros_name_!r}, "
             f"inputs={self.inputs!r}, outputs={self.outputs!r}, "
             f"outcome={b.outcome_field or ''!r}, direction={direction!r}, key={self.key!r}"
-            f"{f', renames={self.renames!r}' if self.renames else ''})"
+            f"{f', renames={self.renames!r}' if self.renames else ''}"
+            f"{f', enums={self.enums!r}' if self.enums else ''})"
         )
 
     @property
     def timeout_parameter(self) -> str | None:
-        """The ROS parameter the runtime declares for this binding (None for actions)."""
-        if self.binding.kind == "action":
-            return None
+        """The ROS parameter the runtime declares for this binding (every kind)."""
         return TIMEOUT_PARAMETER.format(key=self.key)
 
 
@@ -79,18 +82,40 @@ def declared_bindings(
         binding = bind(behaviour, index, model.datatypes, model.enumerations)
         if binding is None or binding.package in taken:
             continue
-        found[name] = _declared(behaviour, binding)
+        found[name] = _declared(behaviour, binding, model)
     return found
 
 
-def _declared(behaviour: Behaviour, binding: Binding) -> Declared:
+def _declared(behaviour: Behaviour, binding: Binding, model: Model) -> Declared:
     idents = {p.name: p.ident for p in (*behaviour.inputs, *behaviour.outputs)}
+    enums = tuple(
+        (p.ident, blanks)
+        for p in behaviour.outputs
+        if (blanks := enum_blanks(p.type, model)) and p.name in dict(binding.outputs).values()
+    )
     return Declared(
         binding,
         ros_name(behaviour.name),
         tuple((idents[name], path) for name, path in binding.inputs),
         tuple((path, idents[name]) for path, name in binding.outputs),
         tuple((side, idents[name], tree) for side, name, tree in binding.renames),
+        enums,
+    )
+
+
+def enum_blanks(type_name: str | None, model: Model, depth: int = 0) -> Blanks:
+    """Where a value of `type_name` holds enumeration values, for the runtime's
+    `convert.filled`: an enumeration's first literal, or (model key, blanks) pairs of the
+    data type fields that hold some (recursively); () for none (the value rule: an empty
+    string read from ROS is the enumeration's zero, its first literal)."""
+    enumeration = next((e for e in model.enumerations if e.name == type_name), None)
+    if enumeration is not None:
+        return enumeration.literals[0] if enumeration.literals else ()
+    datatype = next((d for d in model.datatypes if d.name == type_name), None)
+    if datatype is None or depth >= _MAX_DEPTH:  # SG150 refuses a type containing itself
+        return ()
+    return tuple(
+        (f.name, inner) for f in datatype.fields if (inner := enum_blanks(f.type, model, depth + 1))
     )
 
 

@@ -104,7 +104,7 @@ class _Lowering(Transitions):
                 for p in (member.hardware if member else ())
             ),
             behaviours=tuple(
-                _behaviour_info(b)
+                self._behaviour_info(b)
                 for b in sorted(self.used_behaviours.values(), key=lambda b: b.name)
             ),
             events=tuple(self._event_info(e) for e in self._used_events()),
@@ -118,6 +118,24 @@ class _Lowering(Transitions):
             scope=event.scope,
             fields=tuple((f.ident, f.type) for f in event.fields),
             defaults=tuple((f.ident, self._initial(f)) for f in event.fields),
+        )
+
+    def _behaviour_info(self, behaviour: Behaviour) -> c.BehaviourInfo:
+        ros = behaviour.ros
+        return c.BehaviourInfo(
+            name=behaviour.name,
+            ident=behaviour.ident,
+            kind=behaviour.kind.value,
+            library=behaviour.library,
+            outcomes=behaviour.outcomes,
+            requires=behaviour.requires,
+            inputs=tuple((p.ident, p.type) for p in behaviour.inputs),
+            outputs=tuple((p.ident, p.type) for p in behaviour.outputs),
+            ros_kind=ros.kind if ros else None,
+            ros_name=ros.name if ros else None,
+            ros_type=ros.type if ros else None,
+            sequences=frozenset(p.ident for p in (*behaviour.inputs, *behaviour.outputs) if p.many),
+            output_initials=tuple((p.ident, self._initial(p)) for p in behaviour.outputs),
         )
 
     def _collect_data(self) -> None:
@@ -329,21 +347,3 @@ class _Lowering(Transitions):
                     actions = (*placed.vertex.entry, *placed.vertex.exit)
                     names.update(a.event for a in actions if not isinstance(a, expr.Assign))
         return [e for e in self.index.model.events if e.name in names]
-
-
-def _behaviour_info(behaviour: Behaviour) -> c.BehaviourInfo:
-    ros = behaviour.ros
-    return c.BehaviourInfo(
-        name=behaviour.name,
-        ident=behaviour.ident,
-        kind=behaviour.kind.value,
-        library=behaviour.library,
-        outcomes=behaviour.outcomes,
-        requires=behaviour.requires,
-        inputs=tuple((p.ident, p.type) for p in behaviour.inputs),
-        outputs=tuple((p.ident, p.type) for p in behaviour.outputs),
-        ros_kind=ros.kind if ros else None,
-        ros_name=ros.name if ros else None,
-        ros_type=ros.type if ros else None,
-        sequences=frozenset(p.ident for p in (*behaviour.inputs, *behaviour.outputs) if p.many),
-    )

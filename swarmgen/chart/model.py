@@ -166,6 +166,9 @@ class BehaviourInfo:
     ros_name: str | None = None
     ros_type: str | None = None
     sequences: frozenset[str] = frozenset()  # identifiers of inputs and outputs that are lists
+    # (identifier, initial value) of each output: the shape a simulated behaviour fills
+    # (a data type's nested fields with the model's defaults, `values.initial`)
+    output_initials: tuple[tuple[str, Any], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

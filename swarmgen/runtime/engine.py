@@ -26,7 +26,7 @@ from swarmgen.runtime.chart import (
     Node,
     StepBoundExceeded,
     Transition,
-    fill,
+    fill_fields,
     record,
 )
 from swarmgen.runtime.configuration import (
@@ -92,7 +92,7 @@ class Engine:
             return  # the outcome of a behaviour that was cancelled: discarded
         template = self.chart.events.get(event.name)
         if template:  # the value rule: a declared field the sender left out holds its default
-            event.data = fill(event.data, template)
+            event.data = fill_fields(event.data, template)
         self.ctx.event = event
         enabled = self._select_transitions(event)
         if enabled:

@@ -59,7 +59,6 @@ var $sg = {
     var g = (v !== undefined && v !== null && typeof v === "object" &&
              !Array.isArray(v)) ? v : {};
     var r = {};
-    for (var k in g) { r[k] = g[k]; }
     for (var f in t) { r[f] = $sg.fill(g[f], t[f]); }
     return r;
   }

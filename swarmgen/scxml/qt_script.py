@@ -74,14 +74,17 @@ def _calls(root: Any) -> list[tuple[str, str]]:
 
 
 def _fill(value: Any, template: Any) -> Any:
-    """The value rule (as the runtime's `fill`): a field the sender left out holds its default."""
+    """The value rule (as the runtime's `fill`): a field the sender left out holds its default,
+    a field its data type does not have is dropped."""
     if isinstance(template, dict):
         given = value if isinstance(value, dict) else {}
-        filled = dict(given)
-        for key, default in template.items():
-            filled[key] = _fill(given.get(key), default)
-        return filled
+        return {key: _fill(given.get(key), default) for key, default in template.items()}
     return template if value is None else value
+
+
+def _fill_fields(data: dict[str, Any], template: dict[str, Any]) -> dict[str, Any]:
+    """An event's data (as the runtime's `fill_fields`): declared fields filled, others kept."""
+    return {**data, **{key: _fill(data.get(key), default) for key, default in template.items()}}
 
 
 class _Errors:
@@ -135,7 +138,7 @@ def _submit(machine: object, step: dict[str, Any], document: _Document) -> None:
     name = str(step["event"])
     data = step.get("data") or {}
     if name in document.fields:
-        data = _fill(data, document.fields[name])
+        data = _fill_fields(data, document.fields[name])
     machine.submitEvent(name, data)  # type: ignore[attr-defined]
 
 

@@ -26,6 +26,7 @@ every member processes and every change of its active states, stamped with the r
 
 from __future__ import annotations
 
+import copy
 import heapq
 import itertools
 import math
@@ -122,9 +123,11 @@ class Batch:
         kinds = [m for m in machines.members if counts.get(m.member_type, 0) > 0]
         self._outputs: dict[str, tuple[tuple[str, str | None], ...]] = {}
         self.scopes: dict[str, str] = {}
+        self._initials: dict[tuple[str, str], Any] = {}
         for m in machines.members:
             self._outputs.update(m.outputs)
             self.scopes.update(m.scopes)
+            self._initials.update(m.initials)
         self.world = self._world(kinds, counts)
         self.library = Library(scenario.library)
         self.t: list[int] = [0] * runs
@@ -262,6 +265,10 @@ class Batch:
     def outputs_of(self, behaviour: str) -> tuple[tuple[str, str | None], ...]:
         """The outputs (identifier, type) a behaviour declares."""
         return self._outputs.get(behaviour, ())
+
+    def initial_of(self, owner: str, name: str) -> Any:
+        """The initial value of a behaviour's output or an event's field (None: unknown)."""
+        return copy.deepcopy(self._initials.get((owner, name)))
 
     def activation_of(self, g: int, impl: SimBehaviour) -> Activation | None:
         """The member's live activation of an implementation, if any."""

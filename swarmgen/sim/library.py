@@ -14,11 +14,11 @@ the asyncio backend's simulated behaviours do). The implementations:
 | behaviour | simulated as |
 |---|---|
 | TakeOff, Land | succeed after `timing.takeoff` / `timing.land` ticks |
-| Coverage | random-direction coverage from where the member stands (`World`); if the machine waits for its outcome, it ends `succeeded` on the first find with outputs `target_id`, `target_pose` |
+| Coverage | random-direction coverage from where the member stands (`World`); if the machine waits for its outcome, it ends `succeeded` on the first find with outputs `target_id`, `target_pose` (the target's position in the shape of the output's model type, `swarmgen.sim.poses`) |
 | TargetMonitoring | while active, finds by its member are reported as the swarm event `targetFound` (`target_id`, `pose`) |
 | TaskAllocation (SelectRover) | the finder of the target auctions it: after `timing.allocation` ticks it assigns a bidding UGV (`allocation`: `paired`, the one that started where this member started; or `nearest`), emits `targetAssigned` and succeeds with `rover_id`; no bidder: `aborted` and the target can be found again. A member that did not find the target aborts at once |
 | TaskBidding | bids for its target; succeeds when the auction assigns it, aborts when it assigns another or after `timing.bid_timeout` ticks |
-| MoveTo | drives straight to `target_pose` at one patch per tick |
+| MoveTo | drives straight to the position in its pose argument (`poses.position_of`) at one patch per tick |
 | Rescue | after `timing.rescue` ticks the target is rescued: emits `targetRescued` |
 | Tracking | hovers until its target is rescued, then succeeds |
 | LocalCoverage | succeeds after `timing.local_coverage` ticks with the member's current target |
@@ -37,6 +37,7 @@ from typing import Any, Protocol
 
 from swarmgen.ir.primitives import zero_of
 from swarmgen.runtime.member import Request
+from swarmgen.sim.poses import placed, position_of
 from swarmgen.sim.scenario import Scenario
 from swarmgen.sim.world import FOUND, RESCUED, World
 
@@ -87,6 +88,9 @@ class Host(Protocol):
     def activation_of(self, g: int, impl: SimBehaviour) -> Activation | None:
         """The member's live activation of an implementation, if any."""
 
+    def initial_of(self, owner: str, name: str) -> Any:
+        """The initial value of a behaviour's output or an event's field (None: unknown)."""
+
 
 def outcome(act: Activation, wanted: str) -> str:
     """`wanted` if the machine can react to it, else an outcome it waits for."""
@@ -104,10 +108,12 @@ def target_of(host: Host, act: Activation, key: str = "target_id") -> int | None
     return index if 0 <= index < host.world.tx.shape[1] else None
 
 
-def pose(host: Host, run: int, target: int) -> dict[str, float]:
-    """The pose of a target of a run, as behaviours' outputs carry it."""
+def pose(host: Host, run: int, target: int, owner: str, name: str) -> Any:
+    """The pose of a target of a run as the output or event field `owner.name` carries it
+    (the shape of its model type, `poses.placed`)."""
     w = host.world
-    return {"x": float(w.tx[run, target]), "y": float(w.ty[run, target]), "z": 0.0}
+    template = host.initial_of(owner, name)
+    return placed(template, float(w.tx[run, target]), float(w.ty[run, target]))
 
 
 class SimBehaviour:
@@ -199,14 +205,15 @@ def found(host: Host, run: int, g: int, targets: list[int]) -> None:
         if world.status[run, target] != 0:
             continue
         world.report(run, target, g, now)
-        data = {"target_id": target + 1, "pose": pose(host, run, target)}
         if monitor is not None:
-            host.emit(monitor, "targetFound", data)
+            where = pose(host, run, target, "targetFound", "pose")
+            host.emit(monitor, "targetFound", {"target_id": target + 1, "pose": where})
         if number == 0 and cover is not None and world.reports[g]:
+            where = pose(host, run, target, cover.behaviour, "target_pose")
             host.finish(
                 cover,
                 outcome(cover, "succeeded"),
-                {"target_id": target + 1, "target_pose": data["pose"]},
+                {"target_id": target + 1, "target_pose": where},
             )
 
 
@@ -341,16 +348,13 @@ class MoveTo(SimBehaviour):
 
     def start(self, host: Host, act: Activation) -> None:
         """Drive straight to the goal pose, one patch per tick."""
-        goal = next(
-            (v for v in act.args.values() if isinstance(v, Mapping) and "x" in v and "y" in v),
-            None,
-        )
+        goal = next((p for p in map(position_of, act.args.values()) if p is not None), None)
         if goal is None:
             host.finish(act, outcome(act, "aborted"), None)
             return
         world = host.world
         x0, y0 = world.where(act.g)
-        x1, y1 = float(goal["x"]), float(goal["y"])
+        x1, y1 = goal
         distance = math.hypot(x1 - x0, y1 - y0)
         act.state.update(x0=x0, y0=y0, x1=x1, y1=y1, distance=distance)
 

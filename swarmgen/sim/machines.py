@@ -5,11 +5,14 @@ from __future__ import annotations
 import hashlib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from swarmgen.runtime.chart import Chart
 from swarmgen.runtime.engine import OUTCOME_PREFIX
 from swarmgen.sim.scenario import SimulationError
+
+if TYPE_CHECKING:
+    from swarmgen.chart.model import Chart as ChartModel
 
 
 @dataclass(frozen=True)
@@ -22,6 +25,9 @@ class MemberMachine:
     code: str
     outputs: dict[str, tuple[tuple[str, str | None], ...]]  # behaviour -> (output, type)
     scopes: dict[str, str]  # event -> "swarm" | "local"
+    # (behaviour or event, output or field) -> its initial value: the shape of the model's
+    # type (a pose's nested fields) that the library fills in
+    initials: dict[tuple[str, str], Any]
 
 
 @dataclass(frozen=True)
@@ -61,12 +67,23 @@ def compile_machines(model: Path) -> Machines:
                 render_member(chart, common),
                 {b.name: b.outputs for b in chart.behaviours},
                 {e.name: e.scope or "swarm" for e in chart.events},
+                _initials(chart),
             )
         )
     if not members:
         raise SimulationError(f"{model}: no member type has a state machine; nothing to simulate")
     composition = swarm_composition(validation.model)
     return Machines(validation.model.name, model.name, tuple(members), composition)
+
+
+def _initials(chart: ChartModel) -> dict[tuple[str, str], Any]:
+    """The initial values of the chart's behaviour outputs and event fields."""
+    found: dict[tuple[str, str], Any] = {}
+    for behaviour in chart.behaviours:
+        found.update(((behaviour.name, k), v) for k, v in behaviour.output_initials)
+    for event in chart.events:
+        found.update(((event.name, k), v) for k, v in event.defaults)
+    return found
 
 
 _BUILT: dict[str, tuple[Chart, dict[str, str]]] = {}

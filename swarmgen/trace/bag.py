@@ -6,6 +6,9 @@ One bag per run, mcap by default or sqlite3:
   data = JSON object of the event's fields);
 - every state change of a member on `/<member>/active_states`, type
   `swarmgen_msgs/msg/ActiveStates` (stamp, member, states).
+- feedback of a member's declared actions on `/<member>/feedback`, type
+  `swarmgen_msgs/msg/Feedback` (stamp, member, state, behaviour, values = JSON object of the
+  feedback message's fields, count = feedback messages coalesced into the record; `FEEDBACK_MSG`).
 
 Both definitions are swarmgen's own (`swarmgen.ros.interfaces.EVENT_MSG`, `ACTIVE_STATES_MSG`,
 the ones the generated ROS 2 interface packages use) and are stored in the bag, so rosbags'
@@ -28,10 +31,14 @@ __all__ = [
     "BAG_SUFFIXES",
     "EVENTS_TOPIC",
     "EVENT_TYPE",
+    "FEEDBACK_MSG",
+    "FEEDBACK_TOPIC",
+    "FEEDBACK_TYPE",
     "PACKAGE",
     "STATES_TOPIC",
     "STORAGES",
     "TraceError",
+    "feedback_topic",
     "states_topic",
 ]
 
@@ -40,6 +47,17 @@ EVENT_TYPE = f"{PACKAGE}/msg/Event"
 ACTIVE_STATES_TYPE = f"{PACKAGE}/msg/ActiveStates"
 EVENTS_TOPIC = "/swarm/events"
 STATES_TOPIC = "active_states"
+FEEDBACK_TYPE = f"{PACKAGE}/msg/Feedback"
+FEEDBACK_TOPIC = "feedback"
+# A declared action's feedback, as the rclpy nodes coalesce it (at most one per goal every
+# 0.25 s, the latest values; `_ros/declared.py`, `FeedbackRecord`).
+FEEDBACK_MSG = """builtin_interfaces/Time stamp
+string member
+string state
+string behaviour
+string values
+uint32 count
+"""
 STORAGES = ("mcap", "sqlite3")
 BAG_SUFFIXES = (".bag", ".mcap", ".db3")  # ROS 1 bag; rosbag2 storage files without metadata
 _TOKEN = re.compile(r"[^A-Za-z0-9_]+")
@@ -49,9 +67,17 @@ class TraceError(SwarmgenError):
     """A bag cannot be written or read (a user error: path exists, not a bag, corrupt)."""
 
 
+def _token(member: str) -> str:
+    """The member id made a valid ROS 2 name token."""
+    token = re.sub(r"_+", "_", _TOKEN.sub("_", member)).strip("_") or "member"
+    return f"m{token}" if token[0].isdigit() else token
+
+
 def states_topic(member: str) -> str:
     """`/<member>/active_states`, the member id made a valid ROS 2 name token."""
-    token = re.sub(r"_+", "_", _TOKEN.sub("_", member)).strip("_") or "member"
-    if token[0].isdigit():
-        token = f"m{token}"
-    return f"/{token}/{STATES_TOPIC}"
+    return f"/{_token(member)}/{STATES_TOPIC}"
+
+
+def feedback_topic(member: str) -> str:
+    """`/<member>/feedback`, the member id made a valid ROS 2 name token."""
+    return f"/{_token(member)}/{FEEDBACK_TOPIC}"

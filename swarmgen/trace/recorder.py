@@ -4,7 +4,8 @@ The format is `swarmgen.trace.bag`'s. Recording hooks:
 
 - as a runtime tracer: `Member(..., tracer=recorder)` (asyncio/smach members call
   `recorder.step(member, event)` after every step) or `MemberOptions(tracer=recorder)` on the
-  rclpy nodes (they call `recorder(node, event)`);
+  rclpy nodes (they call `recorder(node, event)`, and `recorder.feedback(node, record)` with
+  the coalesced feedback of declared actions);
 - by hand, from a simulator or any host: `record_event(name, data, sender, stamp_ns)` and
   `record_states(member, states, stamp_ns)`;
 - live ROS 2 topics: `write_raw(topic, msgtype, cdr_bytes, stamp_ns)` with the bytes of a raw
@@ -25,7 +26,16 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol
 
 from swarmgen.console import shown
 from swarmgen.ros.interfaces import ACTIVE_STATES_MSG, EVENT_MSG
-from swarmgen.trace.bag import EVENTS_TOPIC, PACKAGE, STORAGES, TraceError, states_topic
+from swarmgen.trace.bag import (
+    EVENTS_TOPIC,
+    FEEDBACK_MSG,
+    FEEDBACK_TYPE,
+    PACKAGE,
+    STORAGES,
+    TraceError,
+    feedback_topic,
+    states_topic,
+)
 
 if TYPE_CHECKING:
     from rosbags.interfaces import Connection
@@ -38,6 +48,7 @@ __all__ = [
     "BagRecorder",
     "Traced",
     "TracedEvent",
+    "TracedFeedback",
     "VirtualClock",
     "record_replay",
 ]
@@ -107,6 +118,34 @@ class TracedEvent(Protocol):
         """The id of the member (or station) that sent the event."""
 
 
+class TracedFeedback(Protocol):
+    """A feedback record of the rclpy nodes (`_ros/declared.py`'s `FeedbackRecord`)."""
+
+    @property
+    def member(self) -> str:
+        """The member's id."""
+
+    @property
+    def state(self) -> str:
+        """The state running the behaviour."""
+
+    @property
+    def behaviour(self) -> str:
+        """The behaviour's model name."""
+
+    @property
+    def values(self) -> Any:
+        """The latest feedback message's fields, plain values."""
+
+    @property
+    def count(self) -> int:
+        """How many feedback messages the record stands for."""
+
+    @property
+    def stamp(self) -> float:
+        """Seconds since the epoch (0: use the recorder's clock)."""
+
+
 def _json(data: Any) -> str:
     return json.dumps(data if data is not None else {}, sort_keys=True, default=str)
 
@@ -119,6 +158,7 @@ def _typestore(package: str = PACKAGE) -> Typestore:
     store = get_typestore(Stores.ROS2_KILTED)
     types = dict(get_types_from_msg(EVENT_MSG, f"{package}/msg/Event"))
     types.update(get_types_from_msg(ACTIVE_STATES_MSG, f"{package}/msg/ActiveStates"))
+    types.update(get_types_from_msg(FEEDBACK_MSG, FEEDBACK_TYPE))
     store.register(types)
     return store
 
@@ -263,6 +303,40 @@ class BagRecorder:
     def __call__(self, member: Traced, event: TracedEvent | None) -> None:
         """The rclpy nodes' tracer signature (`MemberOptions.tracer`)."""
         self.step(member, event)
+
+    def feedback(self, member: Traced, record: TracedFeedback) -> None:
+        """The rclpy nodes' feedback hook (a `MemberOptions.tracer` with this method gets the
+        coalesced feedback of declared actions): one record on `/<member>/feedback`."""
+        self.record_feedback(
+            record.member or member.member_id or "member",
+            record.state,
+            record.behaviour,
+            record.values,
+            record.count,
+            round(record.stamp * 1e9) if record.stamp > 0 else None,
+        )
+
+    def record_feedback(
+        self,
+        member: str,
+        state: str,
+        behaviour: str,
+        values: Any,
+        count: int = 1,
+        stamp_ns: int | None = None,
+    ) -> None:
+        """One feedback record (`swarmgen_msgs/msg/Feedback`) on /<member>/feedback."""
+        stamp = self.clock() if stamp_ns is None else stamp_ns
+        with self._lock:
+            message = self._store.types[FEEDBACK_TYPE](
+                stamp=_time(self._store, stamp),
+                member=member,
+                state=state,
+                behaviour=behaviour,
+                values=_json(values),
+                count=max(0, min(int(count), 2**32 - 1)),
+            )
+            self._write(feedback_topic(member), FEEDBACK_TYPE, message, stamp)
 
     # --- internals
 

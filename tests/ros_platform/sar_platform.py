@@ -48,6 +48,13 @@ from std_srvs.srv import Empty
 QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 EVENTS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 TARGET = 101  # the one target uav_1 reports
+FOUND_AT = {  # where: the model's PoseStamped (a subset of geometry_msgs/msg/PoseStamped)
+    "header": {"frame_id": "map"},
+    "pose": {
+        "position": {"x": 4.0, "y": 6.0, "z": 0.0},
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+    },
+}
 
 
 def say(event: str, **fields: Any) -> None:
@@ -184,7 +191,7 @@ class Uav(Robot):
             message.pose.pose.position.x, message.pose.pose.position.y = 4.0, 6.0
             self.found.publish(message)
             self.fleet.bag.write(f"/{self.member}/target_found", message)
-            self.send("targetFound", target_id=TARGET, pose={"x": 4.0, "y": 6.0, "z": 0.0})
+            self.send("targetFound", target_id=TARGET, pose=FOUND_AT)
         await self.until(handle, lambda: False)
         return Coverage.Result()
 

@@ -6,17 +6,21 @@
   timeout (ROS parameter `behaviours.<key>.timeout_s`, counted from the state's entry, so it
   covers a service that never appears; 0: no limit). Leaving the state drops the call.
 - topic, `publish`: the inputs as one message, published as soon as the topic has a
-  subscriber or the timeout passed (a topic has no answer: a message published before any
-  subscriber matched is lost), then `succeeded`.
+  matched subscription (`Publisher.get_subscription_count()`, checked every RETRY_S) or,
+  with a warning, once the timeout passed (default 1 s: a topic has no answer, and a message
+  published before any subscriber matched is lost), then `succeeded`.
 - topic, `subscribe`: the behaviour ends `succeeded` (or by its outcome field) when a message
   arrives on the topic after the state's entry, with the message's fields as outputs; with a
   timeout > 0 it ends `aborted` when none came in time.
 Outcomes are delivered from the executor (scheduler), never from inside the engine's step.
+Feedback of declared actions (`goals.py`) is coalesced here (`FeedbackGate`) into
+`FeedbackRecord`s, the trace records of kind `feedback`.
 """
 
 from __future__ import annotations
 
 import itertools
+import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -31,9 +35,75 @@ from .convert import ConversionError, build
 from .scheduler import Handle, Scheduler
 
 RETRY_S = 0.05  # how often a call waits for its service, or a message for its subscriber
+FEEDBACK_INTERVAL_S = 0.25  # at most one feedback record per goal this often (wall seconds)
 TOPIC_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 # (state, activation, behaviour name, outcome, outputs)
 Finish = Callable[[ChartNode, int, str, str, dict[str, Any]], None]
+
+
+@dataclass(frozen=True)
+class FeedbackRecord:
+    """Feedback of a declared action as a trace record: the latest values (plain, the
+    feedback message's fields) and how many feedback messages it stands for (`count` > 1:
+    coalesced); `stamp` in seconds since the epoch (wall clock)."""
+
+    member: str
+    state: str
+    behaviour: str
+    values: Any
+    count: int
+    stamp: float
+
+    def as_json(self) -> dict[str, Any]:
+        """The record as a JSON trace line (`kind` `feedback`)."""
+        return {
+            "kind": "feedback",
+            "member": self.member,
+            "state": self.state,
+            "behaviour": self.behaviour,
+            "values": self.values,
+            "count": self.count,
+        }
+
+
+class FeedbackGate:
+    """The feedback of one goal, rate-limited: the first goes out at once, later ones at most
+    every `FEEDBACK_INTERVAL_S`, each carrying the latest values and how many it replaces."""
+
+    def __init__(self, scheduler: Scheduler, emit: Callable[[Any, int], None]) -> None:
+        self._scheduler = scheduler
+        self._emit = emit
+        self._emitted = float("-inf")
+        self._values: Any = None
+        self._count = 0
+        self._timer: Handle | None = None
+
+    def add(self, values: Any) -> None:
+        """A feedback message arrived."""
+        self._values, self._count = values, self._count + 1
+        if self._timer is None:
+            wait = self._emitted + FEEDBACK_INTERVAL_S - time.monotonic()
+            if wait <= 0:
+                self.flush()
+            else:
+                self._timer = self._scheduler.call_later(wait, self.flush)
+
+    def flush(self) -> None:
+        """Emit what waits (the goal ended, or the interval passed)."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        if self._count:
+            values, count = self._values, self._count
+            self._values, self._count, self._emitted = None, 0, time.monotonic()
+            self._emit(values, count)
+
+    def drop(self) -> None:
+        """Forget what waits (the goal was cancelled)."""
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+        self._values, self._count = None, 0
 
 
 @dataclass(eq=False)
@@ -218,11 +288,17 @@ class DeclaredCalls:
         if call.done:
             return
         publisher = self._endpoints[call.resolved.behaviour.name]
-        if publisher.get_subscription_count() == 0 and waited < timeout:
-            call.retry = self._scheduler.call_later(
-                RETRY_S, lambda: self._publish(call, timeout, waited + RETRY_S)
+        if publisher.get_subscription_count() == 0:
+            if waited < timeout:
+                call.retry = self._scheduler.call_later(
+                    RETRY_S, lambda: self._publish(call, timeout, waited + RETRY_S)
+                )
+                return
+            # published anyway (a topic may have no listener by design), but it may be lost
+            self._node.get_logger().warning(
+                f"behaviour {call.resolved.behaviour.name} in {call.node.id}: no subscriber "
+                f"on {publisher.topic_name!r} within {timeout:g} s: published anyway"
             )
-            return
         publisher.publish(call.message)
         self._scheduler.call_later(0.0, lambda: self._end(call, "succeeded", {}))
 

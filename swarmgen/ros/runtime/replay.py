@@ -43,6 +43,7 @@ from rclpy.context import Context as RosContext
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
+from ...runtime.chart import fill, zero_like
 from ...runtime.replay import describe, expand, outcome_event, running_state
 from .messages import EVENTS_QOS, SWARM_TOPIC, Interfaces
 from .node import MemberNode, MemberOptions
@@ -225,6 +226,19 @@ class Replay:
         assert node.call is not None
         return self.spec.behaviours[node.call.behaviour]
 
+    def _filled(self, state: str, outputs: dict[str, Any]) -> dict[str, Any]:
+        """Data-type outputs filled with their zeros (the value rule) before they go into a ROS
+        answer, given or not: a field the step leaves out must reach the member as the model's
+        zero, not as its message's default (geometry_msgs/Quaternion's `w` is 1), and a ROS
+        answer always carries the whole output."""
+        engine = self.member.engine
+        call = engine.chart.nodes[state].call
+        for output, key in call.results if call is not None else ():
+            value, zero = outputs.get(output), zero_like(engine.chart.data.get(key))
+            if isinstance(zero, Mapping) and (value is None or isinstance(value, Mapping)):
+                outputs[output] = fill(value, zero)
+        return outputs
+
     def _submit(self, step: Step, target: tuple[str, int, bytes | None] | None) -> None:
         member = self.member
         if "complete" not in step:
@@ -236,7 +250,7 @@ class Replay:
             return
         state, activation, goal = target
         outcome = str(step.get("outcome", "succeeded"))
-        outputs = dict(step.get("outputs") or {})
+        outputs = self._filled(state, dict(step.get("outputs") or {}))
         served = self.driver.goals.get(goal) if goal is not None else None
         answer = None
         if served is not None and self._key(state) == goal:

@@ -41,7 +41,7 @@ from __future__ import annotations
 import itertools
 import json
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any
@@ -272,9 +272,13 @@ class SimulatedBehaviours(Node):
             self.errors.append(error)
 
     def emit(self, emission: Emission, names: Mapping[str, Any]) -> None:
-        """Publish an event on behalf of the member."""
-        ident, declared_scope = self.events.get(emission.event, (emission.event, "swarm"))
-        data = render(dict(emission.data), names)
+        """Publish an event on behalf of the member (its data rendered over `names`)."""
+        self.publish_event(emission.event, render(dict(emission.data), names), emission.scope)
+
+    def publish_event(self, event: str, data: Any, scope: str | None = None) -> None:
+        """Publish `event` with `data` as it is (JSON) on behalf of the member; `scope` None
+        or empty: the event's declared one."""
+        ident, declared_scope = self.events.get(event, (event, "swarm"))
         msg = self.interfaces.event(
             next(self._ids),
             self.get_clock().now().nanoseconds / 1e9,
@@ -282,7 +286,7 @@ class SimulatedBehaviours(Node):
             ident,
             json.dumps(data, default=str, sort_keys=True),
         )
-        scope = emission.scope or declared_scope or "swarm"
+        scope = scope or declared_scope or "swarm"
         (self._local if scope == "local" else self.swarm_publisher).publish(msg)
 
 
@@ -291,12 +295,14 @@ def run_simulated(
     defaults: Mapping[str, Mapping[str, Any]],
     events: Mapping[str, tuple[str, str]],
     argv: Sequence[str] | None = None,
+    make: Callable[..., SimulatedBehaviours] | None = None,
 ) -> int:
     """The simulated behaviours of one member in this process (the launch file's executable),
-    configured with ROS parameters; runs until SIGINT/SIGTERM."""
+    configured with ROS parameters; runs until SIGINT/SIGTERM. `make`: the node's class (or a
+    factory taking its arguments; None: `SimulatedBehaviours`)."""
     context, executor = init_process(argv)
     try:
-        node = SimulatedBehaviours(specs, defaults, events, context=context)
+        node = (make or SimulatedBehaviours)(specs, defaults, events, context=context)
     except ScriptError as err:
         print(f"simulated_behaviours: {err}", file=sys.stderr)
         rclpy.try_shutdown(context=context)

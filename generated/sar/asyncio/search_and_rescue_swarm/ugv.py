@@ -15,7 +15,16 @@ EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "tar
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
-    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+    "targetFound": {
+        "target_id": 0,
+        "pose": {
+            "header": {"frame_id": "map"},
+            "pose": {
+                "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
+        },
+    }
 }
 
 
@@ -44,7 +53,17 @@ def build() -> Chart:
     """The statechart of member type UGV, ready for the engine."""
     b = ChartBuilder(
         CHART_NAME,
-        data={"maxSpeed": 0.5, "target_id": 0, "target_pose": {"x": 0.0, "y": 0.0, "z": 0.0}},
+        data={
+            "maxSpeed": 0.5,
+            "target_id": 0,
+            "target_pose": {
+                "header": {"frame_id": "map"},
+                "pose": {
+                    "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                },
+            },
+        },
         events=EVENT_FIELDS,
     )
     b.node("Operating", "state", None, name="Operating")

@@ -21,12 +21,45 @@ GROUP = "search_and_rescue_swarm.behaviours"
 
 
 @dataclass(frozen=True, slots=True)
-class Pose:
-    """Data type Pose."""
+class Point:
+    """Data type Point."""
 
     x: float
     y: float
     z: float
+
+
+@dataclass(frozen=True, slots=True)
+class Quaternion:
+    """Data type Quaternion."""
+
+    x: float
+    y: float
+    z: float
+    w: float
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    """Data type Pose."""
+
+    position: Point
+    orientation: Quaternion
+
+
+@dataclass(frozen=True, slots=True)
+class Header:
+    """Data type Header."""
+
+    frame_id: str
+
+
+@dataclass(frozen=True, slots=True)
+class PoseStamped:
+    """Data type PoseStamped."""
+
+    header: Header
+    pose: Pose
 
 
 @dataclass(frozen=True, slots=True)
@@ -42,7 +75,7 @@ class CoverageResult:
 
     outcome: Literal["succeeded", "aborted", "preempted"]
     target_id: int | None = None
-    target_pose: Pose | None = None
+    target_pose: PoseStamped | None = None
 
 
 class CoverageBehaviour(Protocol):
@@ -86,7 +119,7 @@ class LocalCoverageResult:
 
     outcome: Literal["succeeded", "aborted", "preempted"]
     target_id: int | None = None
-    target_pose: Pose | None = None
+    target_pose: PoseStamped | None = None
 
 
 class LocalCoverageBehaviour(Protocol):
@@ -103,7 +136,7 @@ class LocalCoverageBehaviour(Protocol):
 class MoveToRequest:
     """The inputs of behaviour MoveTo."""
 
-    target_pose: Pose
+    target_pose: PoseStamped
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,7 +159,7 @@ class RescueRequest:
     """The inputs of behaviour Rescue."""
 
     target_id: int
-    target_pose: Pose
+    target_pose: PoseStamped
 
 
 @dataclass(frozen=True, slots=True)
@@ -193,7 +226,7 @@ class TaskAllocationRequest:
     """The inputs of behaviour TaskAllocation."""
 
     target_id: int
-    target_pose: Pose
+    target_pose: PoseStamped
 
 
 @dataclass(frozen=True, slots=True)
@@ -219,7 +252,7 @@ class TaskBiddingRequest:
     """The inputs of behaviour TaskBidding."""
 
     target_id: int
-    target_pose: Pose
+    target_pose: PoseStamped
 
 
 @dataclass(frozen=True, slots=True)

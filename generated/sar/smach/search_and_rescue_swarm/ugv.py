@@ -22,7 +22,16 @@ EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "tar
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
-    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+    "targetFound": {
+        "target_id": 0,
+        "pose": {
+            "header": {"frame_id": "map"},
+            "pose": {
+                "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
+        },
+    }
 }
 
 
@@ -37,7 +46,13 @@ def build_state_machine() -> smach.StateMachine:
     sm = smach.StateMachine(outcomes=["Stopped"])
     sm.userdata.maxSpeed = 0.5
     sm.userdata.target_id = 0
-    sm.userdata.target_pose = {"x": 0.0, "y": 0.0, "z": 0.0}
+    sm.userdata.target_pose = {
+        "header": {"frame_id": "map"},
+        "pose": {
+            "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+        },
+    }
     with sm:
         sm.set_initial_state(["Operating"])
         smach.StateMachine.add(

@@ -15,7 +15,7 @@ import importlib
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from ._ros.node import MemberSpec
+    from ._ros.spec import MemberSpec
 
 MODEL = "PerimeterPatrol"
 INTERFACES = "perimeter_patrol_interfaces"

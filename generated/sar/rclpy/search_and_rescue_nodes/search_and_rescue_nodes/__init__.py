@@ -15,7 +15,7 @@ import importlib
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from ._ros.node import MemberSpec
+    from ._ros.spec import MemberSpec
 
 MODEL = "SearchAndRescue"
 INTERFACES = "search_and_rescue_interfaces"

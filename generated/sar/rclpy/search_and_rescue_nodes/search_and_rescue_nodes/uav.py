@@ -21,7 +21,16 @@ EVENT_SCOPES: dict[str, str] = {
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
-    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+    "targetFound": {
+        "target_id": 0,
+        "pose": {
+            "header": {"frame_id": "map"},
+            "pose": {
+                "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
+        },
+    }
 }
 # The behaviours this member runs, in the member's namespace: on the interface the model
 # declares (binding=), else as an action of the interface package.
@@ -199,9 +208,15 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "data.target_pose",
         "json",
-        {"x": 0.0, "y": 0.0, "z": 0.0},
+        {
+            "header": {"frame_id": "map"},
+            "pose": {
+                "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
+        },
         data="target_pose",
-        description="member data target_pose (Pose)",
+        description="member data target_pose (PoseStamped)",
     ),
     Parameter(
         "hardware.sonars.count",
@@ -528,7 +543,13 @@ def build() -> Chart:
             "rover_id": 0,
             "simulation": False,
             "target_id": 0,
-            "target_pose": {"x": 0.0, "y": 0.0, "z": 0.0},
+            "target_pose": {
+                "header": {"frame_id": "map"},
+                "pose": {
+                    "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                },
+            },
         },
         events=EVENT_FIELDS,
     )

@@ -16,7 +16,16 @@ EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "tar
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
-    "targetFound": {"target_id": 0, "pose": {"x": 0.0, "y": 0.0, "z": 0.0}}
+    "targetFound": {
+        "target_id": 0,
+        "pose": {
+            "header": {"frame_id": "map"},
+            "pose": {
+                "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
+        },
+    }
 }
 # The behaviours this member runs, in the member's namespace: on the interface the model
 # declares (binding=), else as an action of the interface package.
@@ -91,9 +100,15 @@ PARAMETERS: tuple[Parameter, ...] = (
     Parameter(
         "data.target_pose",
         "json",
-        {"x": 0.0, "y": 0.0, "z": 0.0},
+        {
+            "header": {"frame_id": "map"},
+            "pose": {
+                "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            },
+        },
         data="target_pose",
-        description="member data target_pose (Pose)",
+        description="member data target_pose (PoseStamped)",
     ),
     Parameter(
         "hardware.drive.count", "int64", 1, read_only=True, description="drive: 1 x WheelDrive"
@@ -269,7 +284,17 @@ def build() -> Chart:
     """The statechart of member type UGV, ready for the engine."""
     b = ChartBuilder(
         CHART_NAME,
-        data={"maxSpeed": 0.5, "target_id": 0, "target_pose": {"x": 0.0, "y": 0.0, "z": 0.0}},
+        data={
+            "maxSpeed": 0.5,
+            "target_id": 0,
+            "target_pose": {
+                "header": {"frame_id": "map"},
+                "pose": {
+                    "position": {"x": 0.0, "y": 0.0, "z": 0.0},
+                    "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+                },
+            },
+        },
         events=EVENT_FIELDS,
     )
     b.node("Operating", "state", None, name="Operating")

@@ -47,7 +47,7 @@ def to_field(slot: Any, value: Any, where: str) -> Any:
     """`value` as the field of rosidl type `slot` holds it (ConversionError if it cannot)."""
     kind = type(slot).__name__
     if kind == "BasicType":
-        return _basic(slot.typename, value, where)
+        return to_basic(slot.typename, value, where)
     if kind in ("UnboundedString", "BoundedString", "UnboundedWString", "BoundedWString"):
         if not isinstance(value, str):
             raise ConversionError(f"{where}: expected a string, got {_shown(value)}")
@@ -62,7 +62,9 @@ def to_field(slot: Any, value: Any, where: str) -> Any:
     raise ConversionError(f"{where}: unsupported field type {kind}")
 
 
-def _basic(typename: str, value: Any, where: str) -> Any:
+def to_basic(typename: str, value: Any, where: str) -> Any:
+    """`value` as a field of the rosidl basic type `typename` (`double`, `int64`, `boolean`,
+    ...) holds it (ConversionError if it cannot)."""
     if typename == "boolean":
         if not isinstance(value, bool):
             raise ConversionError(f"{where}: expected a bool, got {_shown(value)}")
@@ -198,6 +200,23 @@ def renamed(value: Any, renames: Sequence[Any], to_ros: bool) -> Any:
         name, inner = table.get(key, (key, ()))
         result[name] = renamed(item, inner, to_ros)
     return result
+
+
+def filled(value: Any, blanks: Any) -> Any:
+    """A model value read from ROS with its empty enumeration fields given their zero, the
+    first literal (no literal is empty: `""` means not given). `blanks` is a literal (the value
+    is an enumeration's) or (model key, blanks) pairs of a data type's fields; lists are filled
+    item by item; () leaves the value as it is."""
+    if not blanks:
+        return value
+    if isinstance(value, list | tuple):
+        return [filled(item, blanks) for item in value]
+    if isinstance(blanks, str):
+        return blanks if value == "" else value
+    if not isinstance(value, Mapping):
+        return value
+    table = dict(blanks)
+    return {key: filled(item, table.get(key, ())) for key, item in value.items()}
 
 
 def _shown(value: Any) -> str:

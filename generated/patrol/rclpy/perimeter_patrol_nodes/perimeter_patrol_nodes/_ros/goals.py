@@ -4,6 +4,14 @@
 Entering the state sends the goal (waiting for its server to appear), leaving it cancels the
 goal, and the result (`outcome` + outputs) becomes the event `done.invoke.<state>.<outcome>`,
 tagged with the activation so that late results of cancelled goals are dropped.
+
+Goal fields are converted strictly on both paths (private and declared actions): a value its
+field cannot hold ends the behaviour `aborted`, logged and kept as a member error, and nothing
+is sent. A server that does not answer a sent goal within `goal_answer_timeout_s` (a node
+parameter, default 10 s) gives `aborted`; a declared action with `behaviours.<key>.timeout_s`
+> 0 is cancelled and gives `aborted` when it has not ended that long after the state's entry.
+Feedback of declared actions becomes `FeedbackRecord`s for traces (`on_feedback`), at most one
+per goal every `FEEDBACK_INTERVAL_S` (later ones coalesced: the latest values, with a count).
 """
 
 from __future__ import annotations
@@ -11,7 +19,7 @@ from __future__ import annotations
 import json
 import time
 from collections import deque
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -24,10 +32,17 @@ from .._runtime.chart import Call
 from .._runtime.chart import Node as ChartNode
 from .._runtime.engine import FINALIZE_PREFIX, Engine
 from .._runtime.engine import Event as SwarmEvent
-from .bindings import Resolved, assignments, outcome_of, outputs_of, resolve
+from .bindings import (
+    DEFAULT_TIMEOUTS,
+    Resolved,
+    assignments,
+    outcome_of,
+    outputs_of,
+    resolve,
+)
 from .convert import ConversionError, build, plain
-from .declared import DeclaredCalls
-from .messages import Interfaces, decode, encode
+from .declared import DeclaredCalls, FeedbackGate, FeedbackRecord
+from .messages import Interfaces, decode, to_ros
 from .scheduler import Handle, Scheduler
 from .spec import BehaviourSpec
 
@@ -39,6 +54,8 @@ STATUS_OUTCOMES = {
 }
 SERVER_RETRY_S = 0.05  # how often a goal waits for its action server to appear
 FEEDBACK_KEPT = 256  # feedback of declared actions kept for traces (the latest)
+ANSWER_PARAMETER = "goal_answer_timeout_s"  # a sent goal's wait for accepted/rejected
+ANSWER_TIMEOUT_S = 10.0
 
 
 @dataclass(eq=False)
@@ -55,6 +72,10 @@ class _Run:
     warned: bool = False
     cancelled: bool = False
     finished: bool = False
+    answered: bool = False  # the server accepted or rejected the goal
+    deadline: Handle | None = None  # `timeout_s` of a declared action
+    answer_deadline: Handle | None = None  # `goal_answer_timeout_s` of a sent goal
+    feedback: FeedbackGate | None = None  # declared actions: their coalesced feedback
 
 
 class GoalClient(Node):
@@ -81,8 +102,18 @@ class GoalClient(Node):
         self._declared: dict[str, Resolved] = {
             name: resolve(b) for name, b in sorted(behaviours.items()) if b.binding is not None
         }
-        # (state, behaviour, feedback as plain values) of declared actions, for traces
+        # (state, behaviour, feedback as plain values) of declared actions, the latest
         self.feedback: deque[tuple[str, str, Any]] = deque(maxlen=FEEDBACK_KEPT)
+        # the coalesced feedback records go to these (the launcher's --trace, a bag recorder)
+        self.on_feedback: list[Callable[[FeedbackRecord], None]] = []
+        self._hook_tracer()
+        self.action_timeouts = {
+            name: self._declare_timeout(item)
+            for name, item in self._declared.items()
+            if item.binding.kind == "action"
+        }
+        answer: Any = self.declare_parameter(ANSWER_PARAMETER, ANSWER_TIMEOUT_S).value
+        self.answer_timeout = max(0.0, float(answer))
         self.action_clients: dict[str, ActionClient[Any, Any, Any]] = {}
         for name, b in sorted(behaviours.items()):
             item = self._declared.get(name)
@@ -96,6 +127,22 @@ class GoalClient(Node):
         self.declared_calls = DeclaredCalls(
             self, self.scheduler, others, self._finish_declared, self.errors
         )
+
+    def _hook_tracer(self) -> None:
+        """A tracer (`MemberOptions.tracer`) with a `feedback(member, record)` method (the bag
+        recorder) also gets the feedback records."""
+        tracer = getattr(getattr(self, "options", None), "tracer", None)
+        hook = getattr(tracer, "feedback", None)
+        if callable(hook):
+            self.on_feedback.append(lambda record: hook(self, record))
+
+    def _declare_timeout(self, item: Resolved) -> float:
+        """`behaviours.<key>.timeout_s` of a declared action (default: none, 0)."""
+        default = item.binding.timeout_s
+        if default is None:
+            default = DEFAULT_TIMEOUTS["action"]
+        value: Any = self.declare_parameter(item.parameter, float(default)).value
+        return max(0.0, float(value))
 
     def deliver(self, event: SwarmEvent) -> None:
         """Queue an event for the engine (the member node's)."""
@@ -146,20 +193,64 @@ class GoalClient(Node):
             self.declared_calls.start(node, behaviour.name, args, activation)
             return
         item = self._declared.get(behaviour.name)
-        if item is None:
-            goal_type = self.interfaces.action(behaviour.action).Goal
-            goal = goal_type(
-                **{f.field: encode(f.type, args.get(f.name), f.renames) for f in behaviour.inputs}
-            )
-        else:
-            try:
-                goal = build(item.request, assignments(item, args), behaviour.name)
-            except ConversionError as err:
-                self._abort_later(node, activation, behaviour, f"cannot send {item.label}: {err}")
-                return
+        try:
+            goal = self._goal(behaviour, item, args)
+        except ConversionError as err:
+            label = item.label if item is not None else f"{self.interfaces.package}/action/"
+            label += "" if item is not None else behaviour.action
+            self._abort_later(node, activation, behaviour, f"cannot send {label}: {err}")
+            return
         run = _Run(node, activation, behaviour, goal)
         self._runs[node.id] = run
+        timeout = self.action_timeouts.get(behaviour.name, 0.0)
+        if timeout > 0:
+            run.deadline = self.scheduler.call_later(timeout, lambda: self._timed_out(run))
         self._send_goal(run)
+
+    def _goal(
+        self, behaviour: BehaviourSpec, item: Resolved | None, args: Mapping[str, Any]
+    ) -> Any:
+        """The goal message, converted strictly (ConversionError: a value does not fit)."""
+        if item is not None:
+            return build(item.request, assignments(item, args), behaviour.name)
+        goal_type = self.interfaces.action(behaviour.action).Goal
+        return goal_type(
+            **{
+                f.field: to_ros(f.type, args.get(f.name), f.renames, f"{behaviour.name}.{f.name}")
+                for f in behaviour.inputs
+            }
+        )
+
+    def _timed_out(self, run: _Run) -> None:
+        """`timeout_s` passed: the goal is cancelled and the behaviour ends `aborted`."""
+        run.deadline = None
+        if run.cancelled or run.finished or self._runs.get(run.node.id) is not run:
+            return
+        limit = self.action_timeouts.get(run.behaviour.name, 0.0)
+        self.get_logger().warning(
+            f"behaviour {run.behaviour.name} in {run.node.id}: no result from "
+            f"{run.behaviour.ros_name!r} within {limit:g} s: goal cancelled"
+        )
+        self._cancel(run)
+        self._outcome(run, "aborted", {})
+
+    def _no_answer(self, run: _Run) -> None:
+        """The server did not accept or reject the goal in time: `aborted` (a member error)."""
+        run.answer_deadline = None
+        if run.answered:
+            return
+        run.answered = True  # a late answer is ignored (an accepted goal is cancelled then)
+        self.pending_requests -= 1
+        if run.cancelled or self._runs.get(run.node.id) is not run:
+            return
+        text = (
+            f"goal of {run.behaviour.name} in {run.node.id} not answered by "
+            f"{run.behaviour.ros_name!r} within {self.answer_timeout:g} s"
+        )
+        self.errors.append(text)
+        self.get_logger().error(text)
+        self._cancel(run)
+        self._outcome(run, "aborted", {})
 
     def _abort_later(
         self, node: ChartNode, activation: int, behaviour: BehaviourSpec, reason: str
@@ -211,6 +302,10 @@ class GoalClient(Node):
         future = client.send_goal_async(
             run.goal, feedback_callback=lambda feedback: self._on_feedback(run, feedback)
         )
+        if self.answer_timeout > 0:
+            run.answer_deadline = self.scheduler.call_later(
+                self.answer_timeout, lambda: self._no_answer(run)
+            )
         future.add_done_callback(lambda f: self._on_goal_response(run, f))
 
     def _on_feedback(self, run: _Run, feedback: Any) -> None:
@@ -220,8 +315,31 @@ class GoalClient(Node):
         values = plain(feedback.feedback)
         self.feedback.append((run.node.id, run.behaviour.name, values))
         self.get_logger().debug(f"feedback of {run.behaviour.name}: {json.dumps(values)}")
+        if run.feedback is None:
+            emit = lambda values, count: self._emit_feedback(run, values, count)  # noqa: E731
+            run.feedback = FeedbackGate(self.scheduler, emit)
+        if not (run.cancelled or run.finished):
+            run.feedback.add(values)
+
+    def _emit_feedback(self, run: _Run, values: Any, count: int) -> None:
+        """One coalesced feedback record to the `on_feedback` hooks."""
+        record = FeedbackRecord(
+            self.member_id, run.node.id, run.behaviour.name, values, count, time.time()
+        )
+        for hook in list(self.on_feedback):
+            hook(record)
 
     def _on_goal_response(self, run: _Run, future: Future[Any]) -> None:
+        if run.answered:  # too late: the behaviour ended already
+            handle = future.result() if future.exception() is None else None
+            if handle is not None and handle.accepted:
+                run.handle = handle
+                self._cancel_goal(run)
+            return
+        run.answered = True
+        if run.answer_deadline is not None:
+            run.answer_deadline.cancel()
+            run.answer_deadline = None
         self.pending_requests -= 1
         error = future.exception()
         handle = future.result() if error is None else None
@@ -238,6 +356,8 @@ class GoalClient(Node):
         handle.get_result_async().add_done_callback(lambda f: self._on_result(run, f))
 
     def _on_result(self, run: _Run, future: Future[Any]) -> None:
+        if run.feedback is not None and not run.cancelled:
+            run.feedback.flush()  # the last feedback comes before the outcome
         run.finished = True
         self.results.add(bytes(run.handle.goal_id.uuid))
         if run.cancelled:
@@ -260,7 +380,9 @@ class GoalClient(Node):
             return
         outputs: dict[str, Any] = {}
         for output in run.behaviour.outputs:
-            present, value = decode(output.type, getattr(result, output.field), output.renames)
+            present, value = decode(
+                output.type, getattr(result, output.field), output.renames, output.enums
+            )
             if present:
                 outputs[output.name] = value
         self._outcome(run, outcome, outputs)
@@ -277,6 +399,7 @@ class GoalClient(Node):
         return False
 
     def _outcome(self, run: _Run, outcome: str, outputs: Mapping[str, Any]) -> None:
+        _stop_timers(run)
         if self._runs.get(run.node.id) is run:
             del self._runs[run.node.id]
         self.deliver(
@@ -291,9 +414,7 @@ class GoalClient(Node):
     def _cancel(self, run: _Run) -> None:
         """Preemption: the state was left, its goal is cancelled (its result will be ignored)."""
         run.cancelled = True
-        if run.retry is not None:
-            run.retry.cancel()
-            run.retry = None
+        _stop_timers(run, answer=False)  # a goal on its way is still bounded by its answer
         if run.handle is not None and not run.finished:
             self._cancel_goal(run)
 
@@ -304,3 +425,15 @@ class GoalClient(Node):
             self.pending_cancels -= 1
 
         run.handle.cancel_goal_async().add_done_callback(answered)
+
+
+def _stop_timers(run: _Run, *, answer: bool = True) -> None:
+    """Cancel a run's retry, its deadlines (`answer`: also the goal answer's) and feedback."""
+    for handle in (run.retry, run.deadline, run.answer_deadline if answer else None):
+        if handle is not None:
+            handle.cancel()
+    run.retry = run.deadline = None
+    if answer:
+        run.answer_deadline = None
+    if run.feedback is not None:
+        run.feedback.drop()

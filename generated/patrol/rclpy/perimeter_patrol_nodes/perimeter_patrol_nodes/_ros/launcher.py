@@ -15,7 +15,8 @@ reported errors (a goal aborted by a failing server or with an undeclared outcom
 2, in one line and before ROS starts, for bad arguments (a `--station` time that is not a finite
 number >= 0, an event no member reacts to, a state no member has; counts, times) or a bad
 script; 2, in one line, when a declared interface cannot be used here (`bindings.BindingError`:
-an unknown type, a field it lacks). The last line on stdout is a JSON summary.
+an unknown type, a field it lacks); 2, before ROS starts, for an unusable user behaviour
+(`--library`, entry points: `usercode.load_library`). The last line on stdout is a JSON summary.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ import sys
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import rclpy
@@ -36,7 +38,10 @@ from rclpy.utilities import remove_ros_args
 
 from .._runtime.args import Parser, number
 from .._runtime.engine import Event as SwarmEvent
+from .._runtime.member import Library
+from .._runtime.plugins import PluginError, Plugins
 from .bindings import BindingError, resolve
+from .declared import FeedbackRecord
 from .expressions import ScriptError
 from .messages import SWARM_TOPIC, Interfaces
 from .node import MemberNode, MemberOptions
@@ -44,6 +49,7 @@ from .process import make_executor, spin_until
 from .simulated import SimulatedBehaviours
 from .spec import MemberSpec
 from .station import Station, StationItem, StationProgram, check_station, station_events
+from .usercode import UserBehaviours, UserLoop, add_options, load_library
 
 MAX_MEMBERS = 1000  # per member type in one process (each member is several ROS nodes)
 
@@ -132,6 +138,7 @@ def _parser(prog: str, specs: Mapping[str, MemberSpec], composition: Mapping[str
         )
     for flag, options in _OPTIONS:
         parser.add_argument(flag, **options)
+    add_options(parser)  # --library, --no-plugins: user behaviours (usercode.py)
     return parser
 
 
@@ -142,6 +149,8 @@ class _Swarm:
     station: Station
     members: list[MemberNode] = field(default_factory=list)
     nodes: list[Node] = field(default_factory=list)
+    library: Library | None = None  # the user's behaviours (None: scripts only)
+    loop: UserLoop | None = None  # where they run
 
     def trace(self, member: MemberNode, event: SwarmEvent | None) -> None:
         """`--trace`: one JSON line per member step."""
@@ -152,6 +161,11 @@ class _Swarm:
             "active": member.active(),
         }
         print(json.dumps(line), flush=True)
+
+    def trace_feedback(self, record: FeedbackRecord) -> None:
+        """`--trace`: one JSON line per (coalesced) feedback record of a declared action."""
+        line = {"t": round(time.monotonic() - self.station.started, 4), **record.as_json()}
+        print(json.dumps(line, default=str), flush=True)
 
 
 def _populate(
@@ -179,12 +193,17 @@ def _populate(
             member = MemberNode(
                 spec, namespace=namespace, options=options, scheduler=scheduler, context=context
             )
+            if args.trace:
+                member.on_feedback.append(swarm.trace_feedback)
             swarm.members.append(member)
             swarm.nodes.append(member)
             if args.no_simulation:
                 continue
+            servers: Any = SimulatedBehaviours
+            if swarm.library is not None and swarm.loop is not None:
+                servers = partial(UserBehaviours, swarm.library, swarm.loop)
             swarm.nodes.append(
-                SimulatedBehaviours(
+                servers(
                     specs,
                     defaults,
                     events,
@@ -277,6 +296,8 @@ def _shutdown(executor: Executor, swarm: _Swarm, context: RosContext) -> None:
     executor.shutdown()
     for node in swarm.nodes:
         node.destroy_node()
+    if swarm.loop is not None:
+        swarm.loop.close()
     rclpy.try_shutdown(context=context)
 
 
@@ -296,8 +317,10 @@ def main(
     events: Mapping[str, tuple[str, str]],
     prog: str = "launch_swarm",
     argv: Sequence[str] | None = None,
+    plugins: Plugins | None = None,
 ) -> int:
-    """Run the swarm in this process (`launch_swarm`); the exit code (module docstring)."""
+    """Run the swarm in this process (`launch_swarm`); the exit code (module docstring).
+    `plugins`: the package's typed behaviours (entry points, `--library`: usercode.py)."""
     raw = list(sys.argv[1:] if argv is None else argv)
     parser = _parser(prog, specs, composition)
     args = parser.parse_args(remove_ros_args(["x", *raw])[1:])
@@ -311,11 +334,17 @@ def main(
     except BindingError as err:
         print(f"{prog}: {err}", file=sys.stderr)
         return 2
+    try:  # before ROS starts too, as the asyncio package refuses them
+        library = load_library(plugins, args.library, args.no_plugins, args.time_scale, prog)
+    except PluginError as err:
+        parser.error(f"plug-ins: {err}")
     context = rclpy.get_default_context()  # the default one: SIGINT/SIGTERM end it cleanly
     rclpy.init(args=["launch_swarm", *raw], context=context)
     executor = make_executor(args.executor, context)
     interfaces = Interfaces(next(iter(specs.values())).interfaces)
     swarm = _Swarm(Station(interfaces, context, sys.stdout if args.events else None))
+    if library is not None and not args.no_simulation:
+        swarm.library, swarm.loop = library, UserLoop()
     swarm.nodes.append(swarm.station)
     process_start = time.monotonic()
     try:

@@ -14,7 +14,15 @@ from typing import Any
 from builtin_interfaces.msg import Time
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
-from .convert import ConversionError, nested_class, plain, renamed, to_message
+from .convert import (
+    ConversionError,
+    filled,
+    nested_class,
+    plain,
+    renamed,
+    to_basic,
+    to_message,
+)
 
 SWARM_TOPIC = "/swarm/events"
 LOCAL_TOPIC = "local_events"  # behaviour events of local scope, inside one member's namespace
@@ -35,6 +43,9 @@ STATES_QOS = QoSProfile(
 INT64_MIN, INT64_MAX = -(2**63), 2**63 - 1
 # A field's renames (`Field.renames`): (model key, ROS field, renames inside), nested.
 Renames = tuple[tuple[str, str, tuple[Any, ...]], ...]
+_ZEROS: dict[str, Any] = {"string": "", "enum": "", "bool": False, "int64": 0, "float64": 0.0}
+
+_BASIC = {"bool": "boolean", "int64": "int64", "float64": "double"}  # rosidl's type names
 
 
 def _message_class(type_: str) -> Any:
@@ -42,9 +53,9 @@ def _message_class(type_: str) -> Any:
     return nested_class((package, "msg"), name)
 
 
-def _to_message(type_: str, value: Any, renames: Renames) -> Any:
+def _to_message(type_: str, value: Any, renames: Renames, where: str = "") -> Any:
     """A message of `type_` from a model value (ConversionError if it cannot hold it)."""
-    return to_message(_message_class(type_), renamed(value, renames, True), type_)
+    return to_message(_message_class(type_), renamed(value, renames, True), where or type_)
 
 
 def _from_message(type_: str, message: Any, renames: Renames) -> Any:
@@ -52,38 +63,57 @@ def _from_message(type_: str, message: Any, renames: Renames) -> Any:
     return renamed(plain(message), renames, False)
 
 
-def encode(type_: str, value: Any, renames: Renames = ()) -> Any:
-    """A Python value as the ROS field of `type_` holds it (lenient: unusable values give the
-    field's zero value; JSON and enumeration fields give `""` for a value that is absent; an
-    array field `T[]` takes a list item by item; a message field `pkg/Name` a dict, renamed by
-    `renames` (the field's, `Field.renames`), or its zeros message when the dict does not fit)."""
+def to_ros(type_: str, value: Any, renames: Renames = (), where: str = "value") -> Any:
+    """A model value as the ROS field of `type_` holds it, strictly, by the rule of the declared
+    interfaces (`convert.py`): None (not given) is the field's zero (`""` for JSON and
+    enumeration fields); any other value the field cannot hold as it is raises ConversionError
+    (a string for a number, 2.5 or 2**63 for an `int64`, a number for a `string`, a dict that is
+    not the message). An array field `T[]` takes a list item by item; a message field
+    `pkg/Name` a dict, renamed by `renames` (the field's, `Field.renames`)."""
     if type_.endswith("[]"):
-        items = value if isinstance(value, list | tuple) else ()
-        return [encode(type_[:-2], item, renames) for item in items]
-    if "/" in type_:  # a message: a data type's value, or its zeros when it cannot be one
-        try:
-            return _to_message(type_, {} if value is None else value, renames)
-        except ConversionError:
-            return _message_class(type_)()
+        if value is None:
+            return []
+        if isinstance(value, str | bytes) or not isinstance(value, list | tuple):
+            raise ConversionError(f"{where}: expected a list, got {type(value).__name__}")
+        return [to_ros(type_[:-2], v, renames, f"{where}[{i}]") for i, v in enumerate(value)]
+    if "/" in type_:
+        return _to_message(type_, {} if value is None else value, renames, where)
     if type_ == "json":
-        return "" if value is None else json.dumps(value, default=str, sort_keys=True)
+        try:
+            return "" if value is None else json.dumps(value, sort_keys=True)
+        except (TypeError, ValueError) as err:
+            raise ConversionError(f"{where}: not JSON: {err}") from None
+    if value is None:
+        return _ZEROS[type_] if type_ in _ZEROS else _unknown(type_)
     if type_ in ("string", "enum"):
-        return value if isinstance(value, str) else ("" if value is None else str(value))
-    if type_ == "bool":
-        return bool(value) if isinstance(value, bool | int | float) else False
-    if type_ == "int64":  # out of range would fail when the message is sent, in the executor
-        if isinstance(value, bool | int | float) and INT64_MIN <= value <= INT64_MAX:
-            return int(value)
-        return 0
-    if type_ == "float64":
-        return float(value) if isinstance(value, bool | int | float) else 0.0
+        if isinstance(value, str):
+            return value
+        raise ConversionError(f"{where}: expected a string, got {type(value).__name__}")
+    if type_ not in _ZEROS:
+        return _unknown(type_)
+    return to_basic(_BASIC[type_], value, where)
+
+
+def encode(type_: str, value: Any, renames: Renames = ()) -> Any:
+    """`to_ros`, leniently: a value the field cannot hold gives the field's zero (the replay's
+    filled-in outputs of a `complete`, `served.py`; goals are converted by `to_ros`)."""
+    try:
+        return to_ros(type_, value, renames)
+    except ConversionError:
+        if type_.endswith("[]"):
+            items = value if isinstance(value, list | tuple) else ()
+            return [encode(type_[:-2], item, renames) for item in items]
+        return to_ros(type_, None, renames)
+
+
+def _unknown(type_: str) -> Any:
     raise ValueError(f"unknown field type {type_!r}")
 
 
 def fits(type_: str, value: Any, renames: Renames = ()) -> bool:
     """`value` is one the ROS field of `type_` carries as it is (None: not given, the zero),
     not one `encode` would replace by the zero: what a behaviour's output must be."""
-    if value is None or type_ in ("json", "string"):
+    if value is None or type_ == "json":
         return True
     if type_.endswith("[]"):
         return isinstance(value, list | tuple) and all(fits(type_[:-2], v, renames) for v in value)
@@ -93,7 +123,7 @@ def fits(type_: str, value: Any, renames: Renames = ()) -> bool:
             return bool(_from_message(type_, message, renames) == value)
         except ConversionError:
             return False
-    if type_ == "enum":
+    if type_ in ("enum", "string"):
         return isinstance(value, str)
     if type_ == "bool":
         return isinstance(value, bool)
@@ -103,14 +133,16 @@ def fits(type_: str, value: Any, renames: Renames = ()) -> bool:
     return number and math.isfinite(float(value)) if type_ == "float64" else False
 
 
-def decode(type_: str, value: Any, renames: Renames = ()) -> tuple[bool, Any]:
+def decode(type_: str, value: Any, renames: Renames = (), enums: Any = ()) -> tuple[bool, Any]:
     """(present, value) of a ROS field; an empty JSON or enumeration field is absent (no
     literal is empty: the output's zero, the first literal, is written instead), and so is a
-    message equal to its zeros (its value is still the plain dict)."""
+    message equal to its zeros (its value is still the plain dict). `enums` (`Field.enums`):
+    the enumeration fields inside a message or an array, whose empty strings become their
+    first literal (`convert.filled`)."""
     if type_.endswith("[]"):  # rclpy gives numeric arrays as array.array
-        return True, [decode(type_[:-2], item, renames)[1] for item in value]
+        return True, [decode(type_[:-2], item, renames, enums)[1] for item in value]
     if "/" in type_:  # the zeros message is "not given": the output's zero is written instead
-        return value != type(value)(), _from_message(type_, value, renames)
+        return value != type(value)(), filled(_from_message(type_, value, renames), enums)
     if type_ == "json":
         if value == "":
             return False, None

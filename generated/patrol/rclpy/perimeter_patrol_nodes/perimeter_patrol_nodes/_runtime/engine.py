@@ -27,7 +27,7 @@ from .chart import (
     Node,
     StepBoundExceeded,
     Transition,
-    fill,
+    fill_fields,
     record,
 )
 from .configuration import (
@@ -93,7 +93,7 @@ class Engine:
             return  # the outcome of a behaviour that was cancelled: discarded
         template = self.chart.events.get(event.name)
         if template:  # the value rule: a declared field the sender left out holds its default
-            event.data = fill(event.data, template)
+            event.data = fill_fields(event.data, template)
         self.ctx.event = event
         enabled = self._select_transitions(event)
         if enabled:

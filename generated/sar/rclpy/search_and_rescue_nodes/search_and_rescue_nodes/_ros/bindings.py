@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from .convert import ConversionError, check_path, get_path, renamed
+from .convert import ConversionError, check_path, filled, get_path, renamed
 from .spec import BehaviourSpec, Binding
 
 # rosidl's patterns (as swarmgen.ros.idl_names, which the vendored runtime cannot import).
@@ -26,8 +26,8 @@ _ROS_NAME = re.compile(r"^(?!.*__)[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*
 KINDS = {"action": "action", "service": "srv", "topic": "msg"}
 DIRECTIONS = ("publish", "subscribe")
 # Seconds, when the spec gives none: a service call's limit, the wait of a publisher behaviour
-# for a subscriber; a subscriber behaviour waits for its message without limit (0).
-DEFAULT_TIMEOUTS = {"service": 10.0, "publish": 1.0, "subscribe": 0.0}
+# for a subscriber; an action goal and a subscriber's wait for its message: no limit (0).
+DEFAULT_TIMEOUTS = {"action": 0.0, "service": 10.0, "publish": 1.0, "subscribe": 0.0}
 
 
 class BindingError(ValueError):
@@ -114,9 +114,13 @@ def _snake(name: str) -> str:
 
 def outputs_of(resolved: Resolved, answer: Any) -> dict[str, Any]:
     """The behaviour's outputs read from a result, response or message (data type keys
-    renamed back to the model's names)."""
+    renamed back to the model's names, empty enumeration fields as their first literal)."""
+    blanks = dict(resolved.binding.enums)
     return {
-        output: renamed(get_path(answer, path), renames(resolved, "output", output), False)
+        output: filled(
+            renamed(get_path(answer, path), renames(resolved, "output", output), False),
+            blanks.get(output, ()),
+        )
         for path, output in resolved.binding.outputs
     }
 

@@ -20,13 +20,16 @@ class Field:
     JSON text of a value of no declared type or a sequence of them, or a message of the
     interface package (`swarm_interfaces/Pose`, an array `swarm_interfaces/Pose[]`): a model
     DataType. `renames` are its model keys that the message's fields name otherwise
-    (`(("posX", "pos_x", ()),)`, nested: the third item), passed to encode/decode.
+    (`(("posX", "pos_x", ()),)`, nested: the third item), passed to encode/decode. `enums`
+    names the enumeration fields inside a message value (`(("mode", "search"),)`: model key,
+    first literal; nested: pairs), whose empty strings decode as that literal.
     """
 
     name: str
     field: str
     type: str
     renames: tuple[tuple[str, str, tuple[Any, ...]], ...] = ()
+    enums: Any = ()
 
 
 @dataclass(frozen=True, slots=True)
@@ -54,6 +57,9 @@ class Binding:
     direction: str = ""  # topics only
     key: str = ""  # the behaviour's parameter name (lower snake case); "" derives one
     renames: tuple[tuple[str, str, tuple[Any, ...]], ...] = ()  # (input|output, name, renames)
+    # (output, blanks): its enumeration values, whose empty strings read as the first literal
+    # (`convert.filled`: a literal, or (model key, blanks) pairs of a data type's fields)
+    enums: tuple[tuple[str, Any], ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

@@ -55,15 +55,24 @@ def zero_like(value: Any) -> Any:
 
 
 def fill(value: Any, template: Any) -> Any:
-    """`value` with every field `template` has: what is missing (or null) takes the template's
-    value, recursively; fields the template does not know are kept."""
+    """`value` as a value of `template`'s type (the value rule, docs/semantics.md): every field
+    the template has, what is missing (or null) taking the template's value, recursively; a
+    field the type does not have is dropped (a ROS message's `header.stamp` where the model's
+    type has none, a sender's extra key), so a datum holds exactly its type's fields."""
     if isinstance(template, Mapping):
         given = value if isinstance(value, Mapping) else {}
-        filled = Record({str(k): record(v) for k, v in given.items()})
-        for key, default in template.items():
-            filled[key] = fill(given.get(key), default)
-        return filled
+        return Record({str(k): fill(given.get(k), default) for k, default in template.items()})
     return record(template) if value is None else record(value)
+
+
+def fill_fields(data: Mapping[str, Any] | None, template: Mapping[str, Any]) -> Record:
+    """An event's data on arrival: each declared field as `fill` makes it; fields the event
+    does not declare are kept as they came (no expression can read them: the check)."""
+    data = data if isinstance(data, Mapping) else {}
+    filled = Record({str(k): record(v) for k, v in data.items()})
+    for key, default in template.items():
+        filled[key] = fill(data.get(key), default)
+    return filled
 
 
 FINALIZE_PREFIX = "done.invoke."  # the host's word that a state's behaviour ended
