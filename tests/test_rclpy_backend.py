@@ -25,7 +25,7 @@ from swarmgen.backends.rclpy_backend import (
     nodes_package,
 )
 from swarmgen.chart.lower import lower
-from swarmgen.ros.interfaces import interface_type
+from swarmgen.ros.interfaces import build_and_install, interface_type
 from tests.conftest import ROOT, tool
 from tests.modelkit import ModelKit
 from tests.skips import need_rclpy, requires_rclpy
@@ -571,7 +571,46 @@ def test_private_actions_carry_data_types_as_messages(tmp_path: Path) -> None:
     drone = files["rclpy/survey_nodes/survey_nodes/drone.py"]
     renames = '(("tagId", "tag_id", ()),)'
     assert f'Field("area", "area", "survey_interfaces/Area", {renames})' in drone
-    assert f'Field("found", "found", "survey_interfaces/Area[]", {renames})' in drone
+    enums = 'enums=(("mode", "search"),)'  # an output read back: its enum fields fill
+    flat = re.sub(r"\(\s+", "(", re.sub(r",\s+", ", ", drone))  # as one line, ruff-formatted
+    assert f'Field("found", "found", "survey_interfaces/Area[]", {renames}, {enums}' in flat
+
+
+ENUM_CHECK = r"""
+import json, sys
+from survey_interfaces.action import Scan
+from survey_interfaces.msg import Area
+from survey_nodes import member_types
+from survey_nodes._ros.messages import decode
+
+found = member_types()["Drone"].behaviours["Scan"].outputs[0]
+result = Scan.Result(found=[Area(mode="", tag_id=3), Area(mode="track")], outcome="succeeded")
+present, value = decode(found.type, result.found, found.renames, found.enums)
+print(json.dumps({"enums": found.enums, "present": present, "value": value}))
+"""
+
+
+def test_private_action_nested_enum_output_left_empty_is_the_first_literal(
+    tmp_path: Path,
+) -> None:
+    """A private action's output nests an enumeration (`Area.mode`): the generated `Field`
+    names it, so an empty `mode` in a real result message (survey_interfaces, built) decodes
+    as the first literal `search` in the generated package's runtime; a given one stays."""
+    need_rclpy()
+    result = pipeline.compile_model(survey_model(tmp_path), backends=["rclpy"])
+    out = tmp_path / "out"
+    pipeline.write_tree(result.files, out)
+    build_and_install(out / "rclpy" / "survey_interfaces")  # skipped when current
+    env = harness.ros_env(tmp_path / "roslog", python_path=[out / "rclpy" / "survey_nodes"])
+    done = subprocess.run(
+        ["timeout", "-k", "5", "60", sys.executable, "-c", ENUM_CHECK],
+        capture_output=True, text=True, env=env, cwd=tmp_path, check=False,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    assert report["enums"] == [["mode", "search"]]
+    assert report["present"] is True
+    assert [(a["mode"], a["tagId"]) for a in report["value"]] == [("search", 3), ("track", 0)]
 
 
 def test_data_messages_give_way_to_actions_and_reserved_names() -> None:

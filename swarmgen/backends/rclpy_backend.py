@@ -165,10 +165,10 @@ class BehaviourView:
             self.info.ros_type or "",
         )
 
-        def fields(items: tuple[FieldView, ...]) -> str:
+        def fields(items: tuple[FieldView, ...], decoded: bool = False) -> str:
             inner = "".join(
                 f"Field({f.name!r}, {f.field!r}, {f.type!r}"
-                f"{f', {f.renames!r}' if f.renames else ''}), "
+                f"{f', {f.renames!r}' if f.renames else ''}{self._enums(f) if decoded else ''}), "
                 for f in items
             )
             return f"({inner})"
@@ -177,12 +177,20 @@ class BehaviourView:
             action, io, binding = "", "", f", binding={self.declared.literal(self.ros_name)}"
         else:
             action, binding = self.action, ""
-            io = f"inputs={fields(self.inputs)}, outputs={fields(self.outputs)}, "
+            # only outputs are read back from ROS by the member (the goal client's `decode`)
+            io = f"inputs={fields(self.inputs)}, outputs={fields(self.outputs, True)}, "
         return (
             f"BehaviourSpec(name={self.info.name!r}, action={action!r}, "
             f"ros_name={self.ros_name!r}, kind={self.info.kind!r}, {io}"
             f"outcomes={tuple(self.info.outcomes)!r}, declared={declared!r}{binding})"
         )
+
+    def _enums(self, field: FieldView) -> str:
+        """`, enums=...` of a message field whose data type holds enumerations, else ""."""
+        if "/" not in field.type:  # a plain enumeration field: empty is "not given"
+            return ""
+        blanks = self.messages.enums.get((field.model_type or "").removesuffix("[]"))
+        return f", enums={blanks!r}" if blanks else ""
 
 
 def behaviour_views(

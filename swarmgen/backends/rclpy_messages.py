@@ -1,7 +1,8 @@
 """Model data types as messages of the private interface package (docs/ros2.md, "Data types
 as messages of the private interface package"): the `.msg` of each data type a private action
-carries, its field type (`swarm_interfaces/Pose`, or a «RosMessage»'s own `geometry_msgs/Pose`)
-and the renames of its model keys that the message's field names spell otherwise."""
+carries, its field type (`swarm_interfaces/Pose`, or a «RosMessage»'s own `geometry_msgs/Pose`),
+the renames of its model keys that the message's field names spell otherwise, and where its
+values hold enumerations (`Field.enums`: empty strings read back as the first literal)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import re
 from collections.abc import Collection, Iterable
 from dataclasses import dataclass, field
 
+from swarmgen.backends.rclpy_declared import Blanks, enum_blanks
 from swarmgen.ir.nodes import DataType, Model
 from swarmgen.names import identifier, one_line, ros_name
 from swarmgen.ros.idl_bind import Renames, renames_of
@@ -49,6 +51,8 @@ class DataMessages:
     types: dict[str, str] = field(default_factory=dict)  # data type name -> field type
     texts: dict[str, str] = field(default_factory=dict)  # message name -> its .msg text
     renames: dict[str, Renames] = field(default_factory=dict)  # data type name -> renames
+    # data type name -> its enumeration fields (`enum_blanks`), only those that have some
+    enums: dict[str, Blanks] = field(default_factory=dict)
 
     def packages(self, own: Collection[str]) -> set[str]:
         """The packages of «RosMessage» types used, besides `own`."""
@@ -105,6 +109,9 @@ def data_messages(
         found.types[name] = declared
     for name in order:
         _render(datatypes, name, found, enums)
+        blanks = enum_blanks(name, model)
+        if blanks:  # a message field left empty decodes as the first literal, not as ""
+            found.enums[name] = blanks
     return found
 
 

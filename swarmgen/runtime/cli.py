@@ -31,7 +31,7 @@ from typing import Any, NoReturn
 from swarmgen.runtime.args import Parser, finite
 from swarmgen.runtime.engine import Event
 from swarmgen.runtime.member import CANCEL_GRACE, Fault, InMemoryBus, Library, Member
-from swarmgen.runtime.plugins import Chain, PluginError, Plugins
+from swarmgen.runtime.plugins import Chain, PluginError, Plugins, load_factory
 
 BEAT = 0.05  # seconds between the loop's heartbeats (what the watchdog thread watches)
 BLOCK_AFTER = 0.5  # a loop that misses its heartbeat this long is blocked by a behaviour
@@ -97,17 +97,10 @@ def _member_id(text: str) -> str:
 
 def _library(text: str) -> Callable[..., Library]:
     """`MODULE:FACTORY`: the platform's behaviour library (called with the time scale)."""
-    module_name, _, attribute = text.partition(":")
-    if not module_name or not attribute.isidentifier():
-        raise argparse.ArgumentTypeError(f"expected MODULE:FACTORY, got {text!r}")
     try:
-        module = importlib.import_module(module_name)
-    except (ImportError, SyntaxError) as err:
-        raise argparse.ArgumentTypeError(f"cannot import {module_name}: {err}") from None
-    factory = getattr(module, attribute, None)
-    if not callable(factory):
-        raise argparse.ArgumentTypeError(f"{module_name} has no callable {attribute}")
-    return factory  # type: ignore[no-any-return]
+        return load_factory(text)
+    except PluginError as err:  # argparse's usage error, exit 2
+        raise argparse.ArgumentTypeError(str(err)) from None
 
 
 def station_events(text: str, known: Callable[[str], bool]) -> list[tuple[float, str]]:

@@ -1,4 +1,10 @@
-"""One-shot callbacks on one ROS timer, shared by the nodes of a process."""
+"""One-shot callbacks on one ROS timer, shared by the nodes of a process.
+
+Times are seconds on the scheduler's clock: `time.monotonic()`, or under `use_sim_time` (the
+standard ROS parameter, e.g. `--ros-args -p use_sim_time:=true` for every node of a process)
+the simulated time of `/clock`, so model timers, scripted behaviours and the station program run
+on simulated time; the ROS timer follows the node's clock in both cases.
+"""
 
 from __future__ import annotations
 
@@ -40,10 +46,16 @@ class Scheduler:
         self._armed: float | None = None
         self._logger = node.get_logger()
         self._timer: Timer = node.create_timer(3600.0, self._fire, autostart=False)
+        self._clock = node.get_clock()
+        self.simulated = bool(node.get_parameter("use_sim_time").value)
+
+    def now(self) -> float:
+        """Seconds on the scheduler's clock (simulated under `use_sim_time`)."""
+        return self._clock.now().nanoseconds / 1e9 if self.simulated else time.monotonic()
 
     def call_later(self, delay: float, callback: Callable[[], None]) -> Handle:
         """Run `callback` in the executor after `delay` seconds (at once for 0 or less)."""
-        handle = Handle(time.monotonic() + max(0.0, delay), callback)
+        handle = Handle(self.now() + max(0.0, delay), callback)
         heapq.heappush(self._heap, (handle.when, next(self._order), handle))
         self._arm()
         return handle
@@ -62,14 +74,14 @@ class Scheduler:
         when = self._heap[0][0]
         if self._armed is not None and self._armed <= when:
             return  # already armed for this deadline or an earlier one
-        delay = max(when - time.monotonic(), 0.0)
+        delay = max(when - self.now(), 0.0)
         self._timer.timer_period_ns = max(1000, int(delay * 1e9))
         self._timer.reset()
         self._armed = when
 
     def _fire(self) -> None:
         self._armed = None
-        now = time.monotonic()
+        now = self.now()
         while self._heap and self._heap[0][0] <= now:
             _, _, handle = heapq.heappop(self._heap)
             if handle.cancelled:

@@ -20,7 +20,6 @@ from __future__ import annotations
 import argparse
 import asyncio
 import concurrent.futures
-import importlib
 import queue
 import sys
 import threading
@@ -32,7 +31,7 @@ from typing import Any
 from rclpy.utilities import remove_ros_args
 
 from ...runtime.member import Behaviour, Library, Outcome, Request
-from ...runtime.plugins import Chain, PluginError, Plugins
+from ...runtime.plugins import Chain, PluginError, Plugins, load_factory
 from .process import ros_args
 from .served import Served
 from .simulated import SimulatedBehaviours, run_simulated
@@ -69,21 +68,6 @@ class UserLoop:
             self._thread.join(timeout)
 
 
-def load_factory(text: str) -> Callable[..., Library]:
-    """`MODULE:FACTORY` (PluginError if it does not import or is not callable)."""
-    module_name, _, attribute = text.partition(":")
-    if not module_name or not attribute.isidentifier():
-        raise PluginError(f"--library: expected MODULE:FACTORY, got {text!r}")
-    try:
-        module = importlib.import_module(module_name)
-    except Exception as err:  # the user's import: any error it raises
-        raise PluginError(f"--library: cannot import {module_name}: {err!r}") from None
-    factory = getattr(module, attribute, None)
-    if not callable(factory):
-        raise PluginError(f"--library: {module_name} has no callable {attribute}")
-    return factory  # type: ignore[no-any-return]
-
-
 def load_library(
     plugins: Plugins | None,
     library: str | None,
@@ -95,7 +79,11 @@ def load_library(
     `no_plugins`); None when there are none. Raises PluginError for an unusable one."""
     found: list[Library] = []
     if library:
-        made = load_factory(library)(time_scale)
+        try:
+            factory = load_factory(library)
+        except PluginError as err:
+            raise PluginError(f"--library: {err}") from None
+        made = factory(time_scale)
         if not callable(getattr(made, "get", None)):
             raise PluginError(f"--library {library}: the factory returned no Library")
         found.append(made)

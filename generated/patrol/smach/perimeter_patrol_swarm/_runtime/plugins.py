@@ -13,6 +13,7 @@ the member and every existing `Library` see exactly what they saw before.
 from __future__ import annotations
 
 import dataclasses
+import importlib
 from collections.abc import Awaitable, Callable, Mapping
 from dataclasses import dataclass
 from importlib import metadata
@@ -41,6 +42,23 @@ class Provider:
 
     def __str__(self) -> str:
         return f"{self.behaviour}={self.target} ({self.distribution})"
+
+
+def load_factory(text: str) -> Callable[..., Library]:
+    """`--library MODULE:FACTORY`: the user's library factory (called with the time scale).
+    Raises PluginError when `text` is malformed, the module does not import or has no callable
+    FACTORY. The one loader of every generated package (asyncio command line, ROS nodes)."""
+    module_name, _, attribute = text.partition(":")
+    if not module_name or not attribute.isidentifier():
+        raise PluginError(f"expected MODULE:FACTORY, got {text!r}")
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as err:  # the user's import: any error it raises is a usage error
+        raise PluginError(f"cannot import {module_name}: {err!r}") from None
+    factory = getattr(module, attribute, None)
+    if not callable(factory):
+        raise PluginError(f"{module_name} has no callable {attribute}")
+    return factory  # type: ignore[no-any-return]
 
 
 def request_of(cls: type, values: Mapping[str, Any]) -> Any:

@@ -7,7 +7,6 @@ from __future__ import annotations
 import itertools
 import json
 import math
-import time
 from collections import Counter
 from collections.abc import Mapping
 from typing import Any
@@ -72,7 +71,7 @@ class StationProgram:
         self.members = members
         self.time_scale = time_scale
         self.position = 0
-        self.origin = time.monotonic()
+        self.origin = station.scheduler.now()
         self._timer: Any = None
         for _, _, state in items:
             if state is not None and not any(state in m.engine.chart.nodes for m in members):
@@ -89,7 +88,7 @@ class StationProgram:
                 if not all(m.engine.is_active(state) for m in having):
                     return
             elif at is not None:
-                wait = self.origin + at * self.time_scale - time.monotonic()
+                wait = self.origin + at * self.time_scale - self.station.scheduler.now()
                 if wait > 0:
                     if self._timer is None:
                         self._timer = self.station.scheduler.call_later(wait, self._due)
@@ -112,7 +111,7 @@ class Station(Node):
         self.counts: Counter[str] = Counter()
         self.first: dict[str, float] = {}
         self.log = log
-        self.started = time.monotonic()
+        self.started = self.scheduler.now()  # the origin of trace times (simulated or not)
         self._ids = itertools.count(1)
         self.swarm_publisher = self.create_publisher(interfaces.Event, SWARM_TOPIC, EVENTS_QOS)
         self.create_subscription(interfaces.Event, SWARM_TOPIC, self._on_event, EVENTS_QOS)
@@ -121,16 +120,20 @@ class Station(Node):
         """Send a station event on the swarm topic."""
         self.swarm_publisher.publish(
             self.interfaces.event(
-                next(self._ids), time.time(), "station", name, json.dumps(dict(data or {}))
+                next(self._ids),
+                self.get_clock().now().nanoseconds / 1e9,
+                "station",
+                name,
+                json.dumps(dict(data or {})),
             )
         )
 
     def _on_event(self, msg: Any) -> None:
         self.counts[msg.name] += 1
-        self.first.setdefault(msg.name, time.monotonic() - self.started)
+        self.first.setdefault(msg.name, self.scheduler.now() - self.started)
         if self.log is not None:
             line = {
-                "t": round(time.monotonic() - self.started, 4),
+                "t": round(self.scheduler.now() - self.started, 4),
                 "sender": msg.sender,
                 "name": msg.name,
                 "data": json.loads(msg.data or "{}"),

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from collections.abc import Mapping, Sequence
@@ -155,7 +156,7 @@ class _Swarm:
     def trace(self, member: MemberNode, event: SwarmEvent | None) -> None:
         """`--trace`: one JSON line per member step."""
         line = {
-            "t": round(time.monotonic() - self.station.started, 4),
+            "t": round(self.station.scheduler.now() - self.station.started, 4),
             "member": member.member_id,
             "event": event.name if event is not None else None,
             "active": member.active(),
@@ -164,7 +165,10 @@ class _Swarm:
 
     def trace_feedback(self, record: FeedbackRecord) -> None:
         """`--trace`: one JSON line per (coalesced) feedback record of a declared action."""
-        line = {"t": round(time.monotonic() - self.station.started, 4), **record.as_json()}
+        line = {
+            "t": round(self.station.scheduler.now() - self.station.started, 4),
+            **record.as_json(),
+        }
         print(json.dumps(line, default=str), flush=True)
 
 
@@ -245,24 +249,37 @@ def _connect(executor: Executor, swarm: _Swarm, args: Any) -> bool:
     return True
 
 
-def _run(executor: Executor, swarm: _Swarm, program: list[StationItem], args: Any) -> float:
+def _run(
+    executor: Executor, swarm: _Swarm, program: list[StationItem], args: Any
+) -> tuple[float, float]:
     """Start the members and the station program, spin until every member finished (or the
-    `--duration`); the wall seconds that took."""
-    members = swarm.members
-    started = swarm.station.started = time.monotonic()
+    `--duration`, in simulated seconds); the (wall, simulated) seconds that took. Under
+    `use_sim_time` simulated seconds are `/clock`'s, else wall seconds over `--time-scale`."""
+    members, scheduler = swarm.members, swarm.station.scheduler
+    wall_start = time.monotonic()
+    started = swarm.station.started = scheduler.now()
     for member in members:
         member.start()
     StationProgram(swarm.station, program, members, args.time_scale).advance()
-    limit = None if args.duration is None else args.duration * args.time_scale
-    spin_until(executor, lambda: all(m.finished for m in members), limit)
-    finished_at = time.monotonic()
+    if scheduler.simulated:
+        duration = math.inf if args.duration is None else args.duration * args.time_scale
+        spin_until(
+            executor,
+            lambda: all(m.finished for m in members) or scheduler.now() - started >= duration,
+        )
+    else:
+        limit = None if args.duration is None else args.duration * args.time_scale
+        spin_until(executor, lambda: all(m.finished for m in members), limit)
+    wall, simulated = time.monotonic() - wall_start, scheduler.now() - started
     spin_until(executor, lambda: all(m.idle() for m in members), 2.0, 0.01)
     for member in members:  # the final states and events reach the subscribers
         member.flush()
-    return finished_at - started
+    if not scheduler.simulated:
+        simulated = simulated / args.time_scale if args.time_scale > 0 else math.nan
+    return wall, simulated
 
 
-def _summary(swarm: _Swarm, wall: float, setup: float, time_scale: float) -> dict[str, Any]:
+def _summary(swarm: _Swarm, wall: float, setup: float, simulated: float) -> dict[str, Any]:
     """The launcher's last line: each member's end, the timings, the events counted."""
     members, station = swarm.members, swarm.station
     summary: dict[str, Any] = {
@@ -278,7 +295,7 @@ def _summary(swarm: _Swarm, wall: float, setup: float, time_scale: float) -> dic
         },
         "setup_s": round(setup, 4),
         "wall_s": round(wall, 4),
-        "simulated_s": round(wall / time_scale, 4) if time_scale > 0 else None,
+        "simulated_s": round(simulated, 4) if math.isfinite(simulated) else None,
         "events": dict(sorted(station.counts.items())),
         "first_s": {k: round(v, 4) for k, v in sorted(station.first.items())},
         "steps": sum(m.steps for m in members),
@@ -352,8 +369,9 @@ def main(
         if not _connect(executor, swarm, args):
             print(f"{prog}: action servers not found in {args.server_timeout} s", file=sys.stderr)
             return 3
-        wall = _run(executor, swarm, program, args)
-        summary = _summary(swarm, wall, swarm.station.started - process_start, args.time_scale)
+        setup = time.monotonic() - process_start
+        wall, simulated = _run(executor, swarm, program, args)
+        summary = _summary(swarm, wall, setup, simulated)
         print(json.dumps(summary), flush=True)
         failed = any(m.errors for m in swarm.members) or "server_errors" in summary
         code = 1 if failed else 0
