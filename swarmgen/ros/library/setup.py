@@ -18,5 +18,10 @@ setup(
     maintainer_email="swarmgen@example.com",
     description="swarmgen's behaviour library and continuous world for the detailed simulation",
     license="Apache-2.0",
-    entry_points={"console_scripts": []},
+    entry_points={
+        "console_scripts": [
+            f"world = {PACKAGE}.world_node:main",
+            f"servers = {PACKAGE}.servers:main",
+        ]
+    },
 )

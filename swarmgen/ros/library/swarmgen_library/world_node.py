@@ -1,0 +1,285 @@
+"""The world node: `world.World` on rclpy, stepped in lockstep with the robots' servers.
+
+`world WORLD.json` (console script) or `python -m swarmgen_library.world_node WORLD.json`.
+Per step it publishes `/clock`, then per robot `camera` and `pose` (and the pose's extra
+topics), waits for one stamped `cmd_vel` per served robot and one report per reporter (or
+`step_timeout_s`), settles when a report asks, steps the world, and goes on as fast as the
+answers come (not paced by the wall clock). It writes the result file atomically and exits 0
+when the stop condition holds, 1 on SIGINT/SIGTERM (the result marked partial), 2 on a bad world
+file (one line, no traceback). The protocol: docs/detailed.md, "The ROS step"; the node and its
+file: "The world node".
+"""
+
+from __future__ import annotations
+
+import faulthandler
+import importlib
+import json
+import signal
+import sys
+import time
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from types import FrameType
+from typing import Any
+
+from .worldfile import NS_PER_S, WorldFile, WorldFileError, load
+from .worldrun import Run, write_atomic
+
+POLL_S = 0.1  # longest blocking spin: how fast a signal is noticed
+TEARDOWN_S = 15.0
+
+
+class Interrupted(Exception):
+    """SIGINT or SIGTERM arrived: end the run, marked partial."""
+
+
+def _msg(package: str, name: str) -> Any:
+    """A message class by name (message packages ship no type information)."""
+    return getattr(importlib.import_module(f"{package}.msg"), name)
+
+
+class WorldNode:
+    """The rclpy side of a run: publishers, subscriptions and the lockstep loop."""
+
+    def __init__(self, config: WorldFile, context: Any) -> None:
+        """Create the node, its topics and the executor on an initialised `context`."""
+        import rclpy
+        from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+        self.config = config
+        self.run = Run(config)
+        self.signalled: int | None = None
+        # reliable, keep-last 10: a server is never more than one pose behind (the world waits
+        # for its answer), so 10 only matters after timeouts, when old poses are stale anyway
+        qos = QoSProfile(
+            depth=10, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE
+        )
+        self.node = rclpy.create_node("world", context=context)
+        self.executor = _executor(config, context)
+        self.executor.add_node(self.node)
+        string = _msg("std_msgs", "String")
+        pose = _msg("geometry_msgs", "PoseStamped")
+        stamped = config.cmd_type == "twist_stamped"
+        twist = _msg("geometry_msgs", "TwistStamped" if stamped else "Twist")
+        self._string = string
+        self.clock_msg = _msg("rosgraph_msgs", "Clock")()
+        self.clock_pub = self.node.create_publisher(type(self.clock_msg), "/clock", qos)
+        self.status_pub = self.node.create_publisher(string, "/world/status", qos)
+        self.cmd_topics: dict[str, str] = {}
+        self.outputs: list[tuple[str, Any, Any, list[Any]]] = []
+        for topics in config.topics:
+            ns = f"/{topics.namespace}"
+            message = pose()
+            message.header.frame_id = "map"
+            message.pose.orientation.w = 1.0
+            extra = [self.node.create_publisher(pose, f"{ns}/{t}", qos) for t in topics.pose_topics]
+            camera = self.node.create_publisher(string, f"{ns}/camera", qos)
+            main = self.node.create_publisher(pose, f"{ns}/pose", qos)
+            self.outputs.append((topics.name, message, camera, [main, *extra]))
+            self.cmd_topics[topics.name] = f"{ns}/cmd_vel"
+            self.node.create_subscription(twist, f"{ns}/cmd_vel", self._on_cmd(topics.name), qos)
+        self.node.create_subscription(string, "/world/settle", self._on_report, qos)
+        self.node.create_subscription(string, "/world/rescue", self._on_rescue, qos)
+        self.reporters = config.settle_reporters
+
+    # --- callbacks
+
+    def _on_cmd(self, robot: str) -> Callable[[Any], None]:
+        run = self.run
+
+        def on_cmd(msg: Any) -> None:
+            stamp, linear = msg.header.stamp, msg.twist.linear
+            run.answer(robot, stamp.sec * NS_PER_S + stamp.nanosec, linear.x, linear.y, linear.z)
+
+        def on_twist(msg: Any) -> None:
+            # unstamped (`cmd_type` "twist"): taken for the step it arrives in; a late answer
+            # after a timeout then shifts this robot's commands by a step (docs/detailed.md)
+            linear = msg.linear
+            run.answer(robot, run.t_ns, linear.x, linear.y, linear.z)
+
+        return on_cmd if self.config.cmd_type == "twist_stamped" else on_twist
+
+    def _on_report(self, msg: Any) -> None:
+        self.run.report(msg.data)
+
+    def _on_rescue(self, msg: Any) -> None:
+        self.run.rescue(msg.data)
+
+    # --- the loop
+
+    def spin_until(self, done: Callable[[], bool], seconds: float) -> bool:
+        """Handle messages until `done()` or `seconds` of wall time; whether done."""
+        deadline = time.monotonic() + seconds
+        while not done():
+            if self.signalled is not None:
+                raise Interrupted()
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            self.executor.spin_once(timeout_sec=min(left, POLL_S))
+        return True
+
+    def wait_start(self) -> None:
+        """Wait until every robot's server and every reporter is there (or the start timeout):
+        the robots still missing then start unserved."""
+
+        def ready() -> bool:
+            return not self._missing() and self._live_reporters() >= self.reporters
+
+        self.spin_until(ready, self.config.start_timeout_s)
+        self.run.unserved = set(self._missing())
+        self.reporters = min(self.reporters, self._live_reporters())
+
+    def _missing(self) -> list[str]:
+        missing = []
+        for name, _, _, pubs in self.outputs:
+            if pubs[0].get_subscription_count() == 0 or not self._served(name):
+                missing.append(name)
+        return missing
+
+    def _served(self, robot: str) -> bool:
+        return self.node.count_publishers(self.cmd_topics[robot]) > 0
+
+    def _live_reporters(self) -> int:
+        return self.node.count_publishers("/world/settle")
+
+    def run_loop(self) -> str:
+        """Step until the stop condition; its reason."""
+        run = self.run
+        while True:
+            reason = run.stop_reason()
+            if reason is not None:
+                return reason
+            if run.k % self.config.status_every == 0:
+                self.publish_status(final=False)
+            self.step_once()
+
+    def step_once(self) -> None:
+        """One lockstep step: publish, collect the answers, settle, step the world."""
+        run = self.run
+        run.begin_step()
+        for name in [n for n in run.unserved if self._served(n)]:
+            run.unserved.discard(name)  # a server came (back): wait for it again
+        if self.reporters < self.config.settle_reporters:
+            self.reporters = min(self.config.settle_reporters, self._live_reporters())
+        self.publish_step()
+
+        def complete() -> bool:
+            return not run.waiting_for() and len(run.reporters) >= self.reporters
+
+        if not self.spin_until(complete, self.config.step_timeout_s):
+            self._after_timeout()
+        run.apply()
+        if run.settle and self.config.settle_s > 0:
+            self.spin_until(lambda: False, self.config.settle_s)
+        run.advance()
+
+    def _after_timeout(self) -> None:
+        """A robot without any cmd_vel publisher is unserved from now on; a reporter that is
+        gone is no longer waited for."""
+        run = self.run
+        for name in run.waiting_for():
+            if not self._served(name):
+                run.unserved.add(name)
+                run.timeouts[name] += 1  # its last timeout: not waited for from now on
+        if len(run.reporters) < self.reporters:
+            run.report_timeouts += 1
+            self.reporters = min(self.reporters, self._live_reporters())
+
+    def publish_step(self) -> None:
+        """`/clock`, then per robot its camera and its pose (on every pose topic)."""
+        run, world = self.run, self.run.world
+        sec, nanosec = divmod(run.t_ns, NS_PER_S)
+        self.clock_msg.clock.sec, self.clock_msg.clock.nanosec = sec, nanosec
+        self.clock_pub.publish(self.clock_msg)
+        k, t = run.k, world.time
+        camera_msg = self._string()
+        for name, message, camera, pubs in self.outputs:
+            seen = [{"id": s.id, "x": s.x, "y": s.y} for s in world.visible(name)]
+            camera_msg.data = json.dumps({"k": k, "t": t, "targets": seen})
+            camera.publish(camera_msg)
+            pose = world.pose(name)
+            message.header.stamp.sec, message.header.stamp.nanosec = sec, nanosec
+            position = message.pose.position
+            position.x, position.y, position.z = pose.x, pose.y, pose.z
+            for pub in pubs:
+                pub.publish(message)
+
+    def publish_status(self, final: bool) -> None:
+        """The `/world/status` message (the final one is waited for: the node ends next)."""
+        self.status_pub.publish(self._string(data=json.dumps(self.run.status(final))))
+        if final:
+            from rclpy.duration import Duration
+
+            self.status_pub.wait_for_all_acked(Duration(seconds=1))
+
+    def close(self) -> None:
+        """Destroy the node and the executor."""
+        self.executor.shutdown(timeout_sec=1.0)
+        self.node.destroy_node()
+
+
+def _executor(config: WorldFile, context: Any) -> Any:
+    """rclpy's EventsExecutor (spun in this thread only), or the SingleThreadedExecutor."""
+    if config.executor == "single":
+        from rclpy.executors import SingleThreadedExecutor
+
+        return SingleThreadedExecutor(context=context)
+    from rclpy.experimental.events_executor import EventsExecutor
+
+    return EventsExecutor(context=context)
+
+
+def run_world(config: WorldFile) -> int:
+    """Run one world file to its end; the exit code (0 complete, 1 interrupted)."""
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+
+    context = rclpy.context.Context()
+    # our own handlers: the loop notices a signal within POLL_S and still writes the result
+    rclpy.init(args=["world"], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    node = WorldNode(config, context)
+
+    def on_signal(signum: int, frame: FrameType | None) -> None:
+        node.signalled = signum
+
+    previous = {s: signal.signal(s, on_signal) for s in (signal.SIGINT, signal.SIGTERM)}
+    started = time.monotonic()
+    try:
+        node.wait_start()
+        started = time.monotonic()  # the rate counts stepping, not discovery
+        reason = node.run_loop()
+    except Interrupted:
+        reason = "signal"
+    wall_s = time.monotonic() - started
+    write_atomic(config.output, node.run.result(reason, wall_s))
+    # the result is safe; a teardown that wedges in rcl (seen once, with the single-threaded
+    # executor) must not keep the process: dump where it hangs and exit
+    faulthandler.dump_traceback_later(TEARDOWN_S, exit=True)
+    node.publish_status(final=True)
+    node.close()
+    rclpy.shutdown(context=context)
+    faulthandler.cancel_dump_traceback_later()
+    for signum, handler in previous.items():  # a signal in the teardown changes nothing now
+        signal.signal(signum, handler)
+    return 1 if reason == "signal" else 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The console script `world WORLD.json`."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    args = args[: args.index("--ros-args")] if "--ros-args" in args else args
+    if len(args) != 1:
+        print("usage: world WORLD.json", file=sys.stderr)
+        return 2
+    try:
+        config = load(Path(args[0]))
+    except WorldFileError as err:
+        print(f"world: {err}", file=sys.stderr)
+        return 2
+    return run_world(config)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
