@@ -7,7 +7,6 @@ answers every pose with a fixed stamped velocity, the way the behaviour servers 
 - `answer_until`: the last step answered (null: all), to make the world time out;
 - `report`: publish one `/world/settle` report per step (`by` "driver"), `settle` true for the
   steps in `settle_at`;
-- `stamped`: answer with TwistStamped (default) or, false, a plain Twist (`cmd_type` "twist");
 - `record`: keep every pose and clock (false for long runs); `out`: where the summary goes.
 It ends on the world's final `/world/status`, or on SIGINT/SIGTERM, and writes the summary:
 the poses per robot ([stamp_ns, x, y, z]), the clocks seen, the counts, the final status.
@@ -21,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
-from geometry_msgs.msg import PoseStamped, Twist, TwistStamped  # type: ignore[import-untyped]
+from geometry_msgs.msg import PoseStamped, TwistStamped  # type: ignore[import-untyped]
 from rclpy.executors import ExternalShutdownException
 from rclpy.experimental.events_executor import EventsExecutor
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
@@ -48,8 +47,7 @@ class Driver:
         self.settle_pub = self.node.create_publisher(String, "/world/settle", QOS)
         self.pubs = {}
         for ns in config["robots"]:
-            kind = TwistStamped if config.get("stamped", True) else Twist
-            self.pubs[ns] = self.node.create_publisher(kind, f"/{ns}/cmd_vel", QOS)
+            self.pubs[ns] = self.node.create_publisher(TwistStamped, f"/{ns}/cmd_vel", QOS)
             self.node.create_subscription(PoseStamped, f"/{ns}/pose", self._on_pose(ns), QOS)
             self.node.create_subscription(String, f"/{ns}/camera", self._on_camera, QOS)
         self.node.create_subscription(Clock, "/clock", self._on_clock, QOS)
@@ -70,13 +68,9 @@ class Driver:
             until = self.config.get("answer_until")
             if until is not None and k > until:
                 return
-            if self.config.get("stamped", True):
-                answer = TwistStamped()
-                answer.header.stamp = msg.header.stamp  # the step it answers (the contract)
-                linear = answer.twist.linear
-            else:
-                answer = Twist()
-                linear = answer.linear
+            answer = TwistStamped()
+            answer.header.stamp = msg.header.stamp  # the step it answers (the contract)
+            linear = answer.twist.linear
             linear.x, linear.y, linear.z = self.velocity(ns)
             self.pubs[ns].publish(answer)
             self.counts["answers"] += 1

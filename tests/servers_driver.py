@@ -1,12 +1,19 @@
 """The world's side of the lockstep, for tests/test_detailed_servers.py: a real rclpy node that
 steps a `swarmgen_library.world.World` and publishes `/clock`, each robot's `camera` and `pose`
-as the world node does, applies the `cmd_vel` answers, waits while the servers report settling,
-and sends the goals of one scenario with real action clients.
+as the world node does, takes the stamped `cmd_vel` answers and the servers' step report, settles
+when the report asks, and sends the goals of one scenario with real action clients.
 
     python -m tests.servers_driver SCENARIO    # moveto | cancel | auction | coverage | rescue
+    python -m tests.servers_driver member CONFIG.json
 
 The last stdout line is the JSON record: per step the poses and commands, the goals' statuses
 and results with the step they ended at, and the swarm events heard with their step.
+
+`member` is the other side, for tests/test_detailed_pair.py, where the real world node steps:
+a node acting as the swarm's members. It sends every UAV of the config a TakeOff goal (printing
+`{"event": "ready"}` once they are accepted, so the world can start), then Coverage on success;
+on the first `targetFound` a MoveTo to the config's UGV, then on success a Rescue of the target.
+It ends on the world's final `/world/status` (or after `limit_s`), recording its goals.
 """
 
 from __future__ import annotations
@@ -18,9 +25,9 @@ from typing import Any
 
 import rclpy
 from builtin_interfaces.msg import Time
-from cpswarm_msgs.action import Coverage, Target, TaskAllocation, Tracking
+from cpswarm_msgs.action import Coverage, Takeoff, Target, TaskAllocation, Tracking
 from cpswarm_msgs.msg import TargetPositionEvent
-from geometry_msgs.msg import PoseStamped, Twist
+from geometry_msgs.msg import PoseStamped, TwistStamped
 from move_base_msgs.action import MoveBase
 from rclpy.action import ActionClient
 from rclpy.node import Node
@@ -35,7 +42,7 @@ QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 EVENTS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
 DT = 0.125  # binary-exact steps: 1 m/s moves 0.125 m per step
 SETTLE_S = 0.3  # generous: the test machine may be loaded
-GRACE_S = 0.05
+SUCCEEDED = 4  # action_msgs/GoalStatus
 
 
 def stamp(t: float) -> Time:
@@ -62,20 +69,26 @@ class Driver(Node):
         self.clock = self.create_publisher(Clock, "/clock", QOS)
         self.cameras = {r: self.create_publisher(String, f"/{r}/camera", QOS) for r in robots}
         self.poses = {r: self.create_publisher(PoseStamped, f"/{r}/pose", QOS) for r in robots}
-        self.cmds: dict[str, Twist] = {}
+        self.cmds: dict[str, TwistStamped] = {}
         for robot in robots:
-            self.create_subscription(Twist, f"/{robot}/cmd_vel",
-                                     lambda m, r=robot: self.cmds.__setitem__(r, m), QOS)  # fmt: skip
-        self.settled = 0.0
-        self.create_subscription(String, "/world/settle", self._settle, QOS)
+            self.create_subscription(TwistStamped, f"/{robot}/cmd_vel",
+                                     lambda m, r=robot: self._cmd(r, m), QOS)  # fmt: skip
+        self.reports: dict[int, bool] = {}  # step -> settle
+        self.create_subscription(String, "/world/settle", self._report, QOS)
         self.events: list[dict[str, Any]] = []
         self.create_subscription(Event, "/swarm/events", self._event, EVENTS_QOS)
         self.found: list[dict[str, Any]] = []
         self.create_subscription(TargetPositionEvent, "/uav_1/target_found", self._found, QOS)
         self.record: list[dict[str, Any]] = []
 
-    def _settle(self, message: String) -> None:
-        self.settled = time.monotonic()
+    def _cmd(self, robot: str, message: TwistStamped) -> None:
+        stamp = message.header.stamp
+        if round((stamp.sec + stamp.nanosec * 1e-9) / DT) == self.k:  # answers this step
+            self.cmds[robot] = message
+
+    def _report(self, message: String) -> None:
+        report = json.loads(message.data)
+        self.reports[report["k"]] = self.reports.get(report["k"], False) or report["settle"]
 
     def _event(self, message: Event) -> None:
         self.events.append({"k": self.k, "name": message.name, "sender": message.sender,
@@ -100,17 +113,9 @@ class Driver(Node):
             self.poses[r].get_subscription_count() and self.cameras[r].get_subscription_count()
             and self.count_publishers(f"/{r}/cmd_vel") for r in self.robots), 20)  # fmt: skip
 
-    def quiet(self) -> None:
-        """Give a settle report on its way GRACE_S to arrive (DDS does not order it with the
-        cmd_vel or the goal response), then wait until none came for SETTLE_S."""
-        start = time.monotonic()
-        self.spin_until(lambda: time.monotonic() - start >= GRACE_S)
-        self.spin_until(lambda: time.monotonic() - self.settled >= SETTLE_S)
-
     def step(self) -> None:
-        """Settle, publish step k, take one cmd_vel per robot, settle, apply, step the world."""
-        # as the world node: a goal started between steps is reported, and waited for
-        self.quiet()
+        """Publish step k, take one cmd_vel per robot and the step report, settle when it
+        asks, apply, step the world (as the world node does)."""
         t = self.world.time
         self.clock.publish(Clock(clock=stamp(t)))
         self.cmds = {}
@@ -125,11 +130,13 @@ class Driver(Node):
             message.pose.position.z = pose.z
             message.pose.orientation.w = 1.0
             self.poses[robot].publish(message)
-        self.spin_until(lambda: len(self.cmds) == len(self.robots))
-        self.quiet()
+        self.spin_until(lambda: len(self.cmds) == len(self.robots) and self.k in self.reports)
+        if self.reports.pop(self.k):
+            start = time.monotonic()
+            self.spin_until(lambda: time.monotonic() - start >= SETTLE_S, SETTLE_S + 10)
         entry: dict[str, Any] = {"k": self.k}
         for robot in self.robots:
-            c = self.cmds[robot].linear
+            c = self.cmds[robot].twist.linear
             p = self.world.pose(robot)
             entry[robot] = {"pose": [p.x, p.y, p.z], "cmd": [c.x, c.y, c.z]}
             self.world.command(robot, c.x, c.y, c.z)
@@ -147,6 +154,10 @@ class Goal:
         driver.spin_until(future.done)
         self.handle = future.result()
         assert self.handle.accepted
+        # the goal starts in its execute callback, after the acceptance: let it start before
+        # the next step, as the world's settling after a member's reaction does
+        start = time.monotonic()
+        driver.spin_until(lambda: time.monotonic() - start >= SETTLE_S, SETTLE_S + 10)
         self.driver, self.status, self.result, self.ended = driver, None, None, None
         self.handle.get_result_async().add_done_callback(self._done)
 
@@ -239,11 +250,104 @@ def run_rescue() -> dict[str, Any]:
             "rescue": [rescue.status, rescue.ended]}  # fmt: skip
 
 
+class Member(Node):
+    """The members' side of a run against the world node (the `member` mode)."""
+
+    def __init__(self, config: dict[str, Any]) -> None:
+        super().__init__("test_member")
+        self.config, self.t = config, 0.0
+        self.log: list[dict[str, Any]] = []
+        self.events: list[dict[str, Any]] = []
+        self.final: dict[str, Any] | None = None
+        self.found = False
+        self.actions: dict[str, ActionClient] = {}
+        self.create_subscription(Clock, "/clock", self._on_clock, QOS)
+        self.create_subscription(Event, "/swarm/events", self._on_event, EVENTS_QOS)
+        self.create_subscription(String, "/world/status", self._on_status, QOS)
+
+    def _on_clock(self, message: Clock) -> None:
+        self.t = message.clock.sec + message.clock.nanosec * 1e-9
+
+    def _on_status(self, message: String) -> None:
+        status = json.loads(message.data)
+        self.final = status if status.get("final") else self.final
+
+    def client(self, kind: Any, name: str) -> ActionClient:
+        """The action client of `name` (made once, and waited for)."""
+        if name not in self.actions:
+            self.actions[name] = ActionClient(self, kind, name)
+            assert self.actions[name].wait_for_server(timeout_sec=20), name
+        return self.actions[name]
+
+    def send(self, kind: Any, name: str, goal: Any, then: Any = None) -> None:
+        """Send a goal; log its acceptance and its end; on success call `then(result)`."""
+        entry: dict[str, Any] = {"goal": name, "sent": self.t}
+        self.log.append(entry)
+
+        def ended(future: Any) -> None:
+            answer = future.result()
+            entry.update(status=answer.status, ended=self.t)
+            if then is not None and answer.status == SUCCEEDED:
+                then(answer.result)
+
+        def accepted(future: Any) -> None:
+            handle = future.result()
+            entry["accepted"] = handle.accepted
+            handle.get_result_async().add_done_callback(ended)
+
+        self.client(kind, name).send_goal_async(goal).add_done_callback(accepted)
+
+    def take_off(self, uav: str) -> None:
+        """TakeOff, then Coverage."""
+        altitude = self.config.get("altitude", 1.0)
+        cover = Coverage.Goal(altitude=altitude)
+        self.send(Takeoff, f"/{uav}/cmd/takeoff", Takeoff.Goal(altitude=altitude),
+                  lambda _: self.send(Coverage, f"/{uav}/uav_coverage", cover))  # fmt: skip
+
+    def _on_event(self, message: Event) -> None:
+        data = json.loads(message.data or "{}")
+        self.events.append({"t": self.t, "name": message.name, "sender": message.sender,
+                            "data": data})  # fmt: skip
+        ugv = self.config.get("ugv")
+        if message.name != "targetFound" or self.found or ugv is None:
+            return
+        self.found = True  # the first find: the UGV drives there and rescues it
+        position = data["pose"]["pose"]["position"]
+        where = target_pose(position["x"], position["y"])
+        rescue = Target.Goal(target_id=data["target_id"], target_pose=where)
+        self.send(MoveBase, f"/{ugv}/cmd/moveto", MoveBase.Goal(target_pose=where),
+                  lambda _: self.send(Target, f"/{ugv}/ugv_rescue", rescue))  # fmt: skip
+
+
+def run_member(path: str) -> dict[str, Any]:
+    """The `member` mode: TakeOff goals accepted, "ready", then on until the world ends."""
+    with open(path, encoding="utf-8") as handle:
+        config = json.load(handle)
+    member = Member(config)
+    if config.get("ugv"):  # discovered before the world starts: no wait inside the run
+        member.client(MoveBase, f"/{config['ugv']}/cmd/moveto")
+        member.client(Target, f"/{config['ugv']}/ugv_rescue")
+    for uav in config["uavs"]:
+        member.client(Coverage, f"/{uav}/uav_coverage")
+        member.take_off(uav)
+    deadline = time.monotonic() + 20
+    while not all("accepted" in e for e in member.log) and time.monotonic() < deadline:
+        rclpy.spin_once(member, timeout_sec=0.05)
+    print(json.dumps({"event": "ready"}), flush=True)
+    deadline = time.monotonic() + config.get("limit_s", 60)
+    while member.final is None and time.monotonic() < deadline:
+        rclpy.spin_once(member, timeout_sec=0.05)
+    return {"goals": member.log, "events": member.events, "final": member.final}
+
+
 def main() -> int:
     """Run one scenario; its record as the last stdout line."""
     scenario = sys.argv[1]
     rclpy.init()
     try:
+        if scenario == "member":
+            print(json.dumps(run_member(sys.argv[2])), flush=True)
+            return 0
         runs = {"moveto": lambda: run_moveto(False), "cancel": lambda: run_moveto(True),
                 "auction": run_auction, "coverage": run_coverage, "rescue": run_rescue}  # fmt: skip
         print(json.dumps(runs[scenario]()), flush=True)

@@ -490,3 +490,27 @@ def test_colcon_builds_and_installs_the_package(tmp_path: Path) -> None:
     assert Path(where).is_relative_to(site)
     assert result == _in_process_trajectory()
     assert not list(PACKAGE_ROOT.glob("*.egg-info")), "the build wrote into the source tree"
+
+
+def test_a_uav_camera_sees_and_covers_only_when_airborne() -> None:
+    target = TargetSpec(1, 2.5, 2.7)
+    robots = (
+        RobotSpec("uav_1", "uav", 1.0, 0.5, 2.5, 2.5),
+        RobotSpec("ugv_1", "ugv", 1.0, 0.5, 2.5, 2.9),
+    )
+    world = World(WorldSpec(Area(10, 10), robots, (target,), 1.0, 0.125, airborne_z=0.5))
+    # on the ground the UAV is blind; the UGV's camera is always on (and never covers)
+    assert world.visible("uav_1") == () and world.visible("ugv_1") == (target,)
+    assert world.coverage() == 0.0
+    world.command("uav_1", 0.0, 0.0, 1.0)  # up at 0.125 m per step: z = 0.5 at step 4
+    found = [world.step() for _ in range(5)]
+    assert found[:3] == [(), (), ()] and found[4] == ()
+    assert found[3] == (lib.Detection("uav_1", 1, 2.5, 2.7, 0.5),)
+    times = world.cell_times()
+    assert times[2 * 10 + 2] == 0.5 and world.coverage() == 0.01  # the cell under it, at step 4
+    world.command("uav_1", 0.0, 0.0, -1.0)
+    world.step()  # z = 0.5: still sees
+    world.step()  # z = 0.375: blind again
+    assert world.visible("uav_1") == () and world.visible("ugv_1") == (target,)
+    with pytest.raises(ValueError, match="airborne_z"):
+        WorldSpec(Area(10, 10), robots, (), 1.0, 0.125, airborne_z=-1.0)

@@ -33,13 +33,14 @@ NS = 1_000_000_000
 
 
 def world_file(tmp: Path, **over: Any) -> Path:
-    """One UAV east from (1, 1) at 1 m/s in a 10 m square, dt = 0.125 (binary-exact steps)."""
+    """One UAV east from (1, 1), 1 m up (airborne: its camera sees), at 1 m/s in a 10 m
+    square, dt = 0.125 (binary-exact steps)."""
     config: dict[str, Any] = {
         "area": {"width": 10, "height": 10},
         "cell": 0.5,
         "dt": 0.125,
         "robots": [
-            {"name": "uav_1", "max_speed": 1.0, "fov_radius": 0.5, "start": [1, 1, 0],
+            {"name": "uav_1", "max_speed": 1.0, "fov_radius": 0.5, "start": [1, 1, 1],
              "pose_topics": ["pos_provider/pose"]},
         ],
         "targets": [{"id": 7, "x": 5.0, "y": 1.0}],
@@ -102,7 +103,7 @@ def test_the_body_reaches_the_wall_where_geometry_says(east: list[Any]) -> None:
     assert len(poses) == 80  # steps 0..79 are published; step 80 is where it stops
     for k, (stamp, x, y, z) in enumerate(poses):
         assert stamp == k * 125_000_000  # k * dt, exact
-        assert (x, y, z) == (min(1.0 + k * 0.125, 10.0), 1.0, 0.0)
+        assert (x, y, z) == (min(1.0 + k * 0.125, 10.0), 1.0, 1.0)
     assert [p[1] for p in poses].index(10.0) == 72  # (10 - 1) / (1 m/s * 0.125 s)
     # the camera disc's edge (0.5 m) reaches the target at x = 4.5: step 28, t = 3.5 s
     assert result["targets"]["7"]["first_detection"] == 3.5
@@ -121,17 +122,6 @@ def test_two_runs_of_one_file_give_the_same_result(east: list[Any]) -> None:
     second.pop("wall")
     assert first == second
     assert first["samples"][0] == [0, 0.01] and len(first["samples"]) == 81
-
-
-def test_unstamped_answers_give_the_same_run(east: list[Any], tmp_path: Path) -> None:
-    """`cmd_type` "twist": a platform that answers with a plain Twist (no timeouts here)."""
-    driver = {"robots": ["uav_1"], "dt": 0.125, "velocity": [1.0, 0.0, 0.0], "stamped": False}
-    code, err, result, _ = run(tmp_path, world_file(tmp_path, cmd_type="twist"), driver)
-    assert code == 0, err[-2000:]
-    stamped = dict(east[0][2])
-    stamped.pop("wall", None)
-    result.pop("wall")
-    assert result == stamped
 
 
 def test_a_driver_that_stops_answering_gives_timeouts_not_a_hang(tmp_path: Path) -> None:
@@ -179,6 +169,8 @@ def test_step_reports_and_settling(tmp_path: Path) -> None:
         ({"targets": [{"id": 1, "x": 50, "y": 1}]}, "target 1 lies outside the area"),
         ({"stop": {}}, "stop.time_s: missing"),
         ({"cell": 3}, "world: cell 3.0 does not divide the area side 10.0"),
+        ({"cmd_type": "twist"}, "cmd_type: must be 'twist_stamped', got 'twist'"),
+        ({"airborne_z": -0.5}, "airborne_z: must be >= 0, got -0.5"),
     ],
 )
 def test_a_bad_world_file_is_one_line_and_exit_2(
@@ -193,6 +185,20 @@ def test_a_bad_world_file_is_one_line_and_exit_2(
     assert done.returncode == 2
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
     assert message in done.stderr, done.stderr
+
+
+def test_an_output_that_cannot_be_written_is_one_line_and_exit_2(tmp_path: Path) -> None:
+    (tmp_path / "afile").write_text("")  # a file where the output's folder should be
+    env = {**os.environ, "PYTHONPATH": str(LIBRARY)}
+    for output, why in [("afile/result.json", "is not a folder"), (".", "it is a folder")]:
+        world = world_file(tmp_path, output=output)
+        done = subprocess.run(
+            [sys.executable, "-m", "swarmgen_library.world_node", str(world)],
+            capture_output=True, text=True, env=env, timeout=60, check=False,
+        )  # fmt: skip
+        assert done.returncode == 2, done.stderr
+        assert done.stderr.count("\n") == 1 and done.stderr.startswith("world: output: ")
+        assert why in done.stderr, done.stderr
 
 
 def test_a_file_that_is_not_json(tmp_path: Path) -> None:
@@ -256,6 +262,7 @@ def test_the_lockstep_rules_without_ros(tmp_path: Path) -> None:
     from swarmgen.ros.library.swarmgen_library.worldfile import load
     from swarmgen.ros.library.swarmgen_library.worldrun import Run
 
+    assert load(world_file(tmp_path)).spec.airborne_z == 0.5  # a grounded UAV is blind
     run_ = Run(load(world_file(tmp_path, settle_reporters=1)))
     run_.begin_step()
     run_.answer("uav_1", 125_000_000, 1.0, 0.0, 0.0)  # an answer to step 1, at step 0: stale

@@ -44,6 +44,18 @@ if TYPE_CHECKING:
 @record_options(
     "Also write one ROS 2 bag per run, DIR/<configuration>-<rep>, into this new directory."
 )
+@click.option(
+    "--level", type=click.Choice(["abstract", "detailed"]), default="abstract",
+    show_default=True,
+    help="abstract: the grid world in-process; detailed: the generated rclpy swarm, "
+    "unmodified, against the behaviour library in the continuous world on ROS 2 "
+    "(docs/detailed.md).",
+)  # fmt: skip
+@click.option(
+    "--keep-runs", type=PATH,
+    help="(detailed) Keep every run's world and servers files and process logs in this new "
+    "directory.",
+)  # fmt: skip
 @guarded
 def simulate(
     model: Path,
@@ -56,20 +68,34 @@ def simulate(
     output: Path | None,
     record: Path | None,
     storage: str,
+    level: str,
+    keep_runs: Path | None,
 ) -> None:
-    """Run MODEL's compiled behaviours in the paper's abstract world and report the statistics."""
+    """Run MODEL's compiled behaviours in the paper's abstract world (or, with `--level
+    detailed`, the generated ROS 2 swarm in the continuous world) and report the statistics."""
     from swarmgen.sim import run as sim_run
 
     check_record(record)
+    if level == "detailed" and record is not None:
+        raise click.UsageError("--record: the detailed level records no bags yet")
+    if level == "abstract" and keep_runs is not None:
+        raise click.UsageError("--keep-runs is for --level detailed")
     started = time.perf_counter()
     chosen = _sweep(scenario, members, targets, reps, seed)
     _check_sweep(model, chosen)
     progress = _ProgressBar(started)
-    sim, files = sim_run.simulate_model(model, chosen, output, workers, progress, record, storage)
+    if level == "detailed":
+        from swarmgen.sim.detailed.main import simulate_detailed
+
+        sim, files = simulate_detailed(model, chosen, output, workers, progress, keep_runs)
+    else:
+        sim, files = sim_run.simulate_model(
+            model, chosen, output, workers, progress, record, storage
+        )
     if output is None:
         _print_tables(files)
     errors = sum(len(r.errors) for r in sim.runs)
-    unfinished = sum(1 for r in sim.runs if r.reason in ("max_ticks", "stalled"))
+    unfinished = sum(1 for r in sim.runs if r.reason in ("max_ticks", "stalled", "failed"))
     where = f" -> {console.shown(output)}" if output is not None else ""
     click.echo(
         f"swarmgen: {console.shown(model)}{where}: {len(sim.runs)} runs of "
@@ -80,6 +106,12 @@ def simulate(
     )
     if record is not None:
         click.echo(f"swarmgen: recorded {len(sim.runs)} run(s) into {record} ({storage})", err=True)
+    failed = [r for r in sim.runs if r.reason == "failed"]
+    for run in failed[:10]:
+        label = sim.configs[run.config].label()
+        click.echo(f"swarmgen: run {run.rep} of {label} failed: {run.errors[0]}", err=True)
+    if failed:  # results were written, with these runs marked failed
+        sys.exit(int(dg.ExitCode.MODEL_ERRORS))
 
 
 def _sweep(

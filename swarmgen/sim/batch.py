@@ -87,12 +87,28 @@ class RunResult:
     rep: int
     end_tick: int
     reason: str  # "coverage", "rescued", "ticks" (the stop conditions), "max_ticks", "stalled"
-    coverage: list[int | None]  # time to each coverage level (None: not reached)
+    coverage: list[float | None]  # time to each coverage level (None: not reached)
     coverage_final: float  # share of patches seen at the end
-    found: list[int | None]  # per target: time it was found (reported and taken up)
-    rescued: list[int | None]  # per target: time it was rescued
+    found: list[float | None]  # per target: time it was found (reported and taken up)
+    rescued: list[float | None]  # per target: time it was rescued
     events: int  # events processed by the engines
     errors: list[str] = field(default_factory=list)
+
+
+def run_draws(scenario: Scenario, config: Config, rep: int) -> tuple[int, list[tuple[int, int]]]:
+    """A run's random draws, the same at every level (the detailed one places its targets and
+    keys its members' streams with them): the key of its members' turn streams, and its target
+    patches (the scenario's, or drawn without repeats)."""
+    seq = np.random.SeedSequence([scenario.seed, *config.seed_key(), rep])
+    turns, places = seq.spawn(2)
+    key = int(turns.generate_state(1, np.uint64)[0])
+    if scenario.target_positions is not None:
+        return key, list(scenario.target_positions)
+    count = min(config.targets, scenario.width * scenario.height)
+    cells = np.random.default_rng(places).choice(
+        scenario.width * scenario.height, size=count, replace=False
+    )
+    return key, [(int(c % scenario.width), int(c // scenario.width)) for c in cells]
 
 
 # --- a batch of runs --------------------------------------------------------------------------
@@ -158,10 +174,9 @@ class Batch:
             heads.append(fan_headings(n) if place.headings == "fan" else np.full(n, math.pi / 2))
         keys, targets = [], []
         for rep in self.reps:
-            seq = np.random.SeedSequence([scenario.seed, *self.config.seed_key(), rep])
-            turns, places = seq.spawn(2)
-            keys.append(turns.generate_state(1, np.uint64)[0])
-            targets.append(self._targets(np.random.default_rng(places)))
+            key, placed = run_draws(scenario, self.config, rep)
+            keys.append(key)
+            targets.append(placed)
         empty = np.zeros(0)
         return World(
             geo,
@@ -195,14 +210,6 @@ class Batch:
             )
         for item in self.scenario.station:
             self.at(run, item.tick, self._broadcast(bus, item.event, item.data))
-
-    def _targets(self, rng: np.random.Generator) -> list[tuple[int, int]]:
-        s = self.scenario
-        if s.target_positions is not None:
-            return list(s.target_positions)
-        count = min(self.config.targets, s.width * s.height)
-        cells = rng.choice(s.width * s.height, size=count, replace=False)
-        return [(int(c % s.width), int(c // s.width)) for c in cells]
 
     @staticmethod
     def _broadcast(
@@ -425,7 +432,7 @@ class Batch:
         w = self.world
         seen = np.sort(w.seen_times(run).reshape(-1))
         cells = len(seen)
-        coverage: list[int | None] = []
+        coverage: list[float | None] = []
         for level in self.scenario.coverage_levels:
             need = max(1, math.ceil(level * cells - 1e-9))
             value = int(seen[need - 1])
@@ -434,7 +441,7 @@ class Batch:
             e for m in self.members[run * w.per_run : (run + 1) * w.per_run] for e in m.errors
         ]
 
-        def times(ticks: np.ndarray) -> list[int | None]:
+        def times(ticks: np.ndarray) -> list[float | None]:
             return [None if v < 0 else int(v) - self.origin for v in ticks.tolist()]
 
         end = self.t[run]

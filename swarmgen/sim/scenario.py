@@ -121,6 +121,7 @@ class Scenario:
     )
     target_levels: list[float] = field(default_factory=lambda: [0.0, 0.5, 0.75, 0.9, 1.0])
     given: tuple[str, ...] = ()  # member types named on the command line (must exist)
+    detailed: dict[str, Any] = field(default_factory=dict)  # `sim.detailed.params` reads it
 
     def placement_of(self, member_type: str) -> Placement:
         """The placement of a member type, else of `*`, else the default."""
@@ -188,13 +189,14 @@ class Scenario:
             "seed": self.seed,
             "coverage_levels": self.coverage_levels,
             "target_levels": self.target_levels,
+            **({"detailed": self.detailed} if self.detailed else {}),
         }
 
 
 _KEYS = {
     "name", "description", "world", "members", "placement", "targets", "target_positions",
     "station", "clock_origin", "timing", "allocation", "library", "stop", "stop_level",
-    "max_ticks", "reps", "seed", "coverage_levels", "target_levels",
+    "max_ticks", "reps", "seed", "coverage_levels", "target_levels", "detailed",
 }  # fmt: skip
 
 
@@ -272,6 +274,7 @@ def _parse(payload: Any, default_name: str) -> Scenario:
         seed=_int(top, "seed", 1, "$", 0, MAX_SEED),
         coverage_levels=_fractions(top, "coverage_levels", Scenario("x").coverage_levels),
         target_levels=_fractions(top, "target_levels", Scenario("x").target_levels),
+        detailed=_section(top, "detailed", None),
     )
 
 

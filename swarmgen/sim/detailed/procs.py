@@ -14,6 +14,7 @@ import contextlib
 import os
 import signal
 import subprocess
+import threading
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -79,13 +80,20 @@ class ProcessGroup:
         self.started.append(started)
         return started
 
-    def wait(self, name: str, timeout: float, watch: Sequence[str] = ()) -> int | None:
+    def wait(
+        self,
+        name: str,
+        timeout: float,
+        watch: Sequence[str] = (),
+        cancel: threading.Event | None = None,
+    ) -> int | None:
         """Wait for process `name` to exit (its exit code) for at most `timeout` seconds; None
-        on time-out. Returns early, with None, when a process of `watch` exits first."""
+        on time-out. Returns early, with None, when a process of `watch` exits first or
+        `cancel` is set."""
         wanted = self._named(name)
         watched = [self._named(n) for n in watch]
         deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
+        while time.monotonic() < deadline and not (cancel is not None and cancel.is_set()):
             code = wanted.process.poll()
             if code is not None:
                 return code

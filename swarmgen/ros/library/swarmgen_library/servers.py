@@ -5,9 +5,11 @@
 Each member node serves, in the member's namespace, every behaviour the servers file names, at
 its `rosName` with its `rosType` (imported by name), driving the pure controllers in lockstep
 with the world node: it acts for step k once it holds the `camera` and the `pose` of step k, and
-answers each pose with exactly one `cmd_vel` (the active moving behaviour's command, else zero).
-The process's own node (`swarmgen_servers`) carries what the members share: the swarm events,
-the auction topic, `/world/settle` and `/world/rescue`. The algorithms are in `sar_servers`.
+answers each pose with exactly one stamped `cmd_vel` (the active moving behaviour's command,
+else zero; the pose's stamp copied in). Once every member has answered step k, the process sends
+its one step report for k on `/world/settle`. The process's own node (`swarmgen_servers`)
+carries what the members share: the swarm events, the auction topic, `/world/settle` and
+`/world/rescue`. The algorithms are in `sar_servers`.
 Exit 2 (one line on stderr) for a bad servers file, a type that does not import, or a behaviour
 the library does not implement. See docs/detailed.md, "The behaviour servers".
 """
@@ -22,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 import rclpy
-from geometry_msgs.msg import PoseStamped, Twist  # type: ignore[import-untyped,unused-ignore]
+from geometry_msgs.msg import PoseStamped, TwistStamped  # type: ignore[import-untyped,unused-ignore]
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -94,6 +96,8 @@ class Swarm(Node):
         self.config = config
         self.members: dict[str, MemberNode] = {}
         self.k = 0  # the latest step any member acted on
+        self._pending = False  # something a member reacts to happened since the last report
+        self._acted: dict[int, set[str]] = {}  # per step, the members that have answered it
         self.positions: dict[int, tuple[float, float]] = {}  # where each known target is
         self.found_by: dict[int, str] = {}
         self.rescued: set[int] = set()
@@ -111,8 +115,22 @@ class Swarm(Node):
             )
 
     def settle(self) -> None:
-        """Something a member reacts to happened in the current step: the world lets it."""
-        self._settle.publish(String(data=json.dumps({"k": self.k, "settle": True})))
+        """Something a member reacts to happened: the next step report asks the world to
+        settle (to give the members' reactions time before it steps on)."""
+        self._pending = True
+
+    def acted(self, member: str, k: int) -> None:
+        """`member` has answered step k: once every member has, the one report of step k
+        (`{"k", "by", "settle"}`), settling when anything happened since the last report."""
+        done = self._acted.setdefault(k, set())
+        done.add(member)
+        if len(done) < len(self.members):
+            return
+        for old in [s for s in self._acted if s <= k]:  # an older step never completes now
+            del self._acted[old]
+        report = {"k": k, "by": self.config.name, "settle": self._pending}
+        self._pending = False
+        self._settle.publish(String(data=json.dumps(report)))
 
     def send(self, sender: str, name: str, data: dict[str, Any]) -> None:
         """A swarm event from `sender`, if the model declares `name` (and there is a type)."""
@@ -157,7 +175,9 @@ class Swarm(Node):
     def rescue(self, robot: str, target_id: int) -> None:
         """`robot` rescued the target: the world and the swarm are told."""
         self.rescued.add(target_id)
-        self._rescue.publish(String(data=json.dumps({"target": target_id, "robot": robot})))
+        # `k`: the world counts the rescue at the step it happened in, whenever it arrives
+        rescue = {"target": target_id, "robot": robot, "k": self.k}
+        self._rescue.publish(String(data=json.dumps(rescue)))
         self._learn_rescued(target_id)
         self.send(robot, "targetRescued", {"target_id": target_id})
 
@@ -214,9 +234,9 @@ class MemberNode(Node):
         self.monitor: TargetMonitoring | None = None
         self.found_publisher: tuple[Any, Any] | None = None  # (publisher, message type)
         self.last_target: int | None = None
-        self._poses: dict[int, Pose] = {}
+        self._poses: dict[int, tuple[Pose, Any]] = {}  # per step: the pose and its stamp
         self._cameras: dict[int, list[tuple[int, float, float]]] = {}
-        self._cmd = self.create_publisher(Twist, "cmd_vel", QOS)
+        self._cmd = self.create_publisher(TwistStamped, "cmd_vel", QOS)
         self.create_subscription(PoseStamped, "pose", self._on_pose, QOS)
         self.create_subscription(String, "camera", self._on_camera, QOS)
 
@@ -268,7 +288,7 @@ class MemberNode(Node):
     def _on_pose(self, message: PoseStamped) -> None:
         stamp = message.header.stamp
         k = round((stamp.sec + stamp.nanosec * 1e-9) / self.swarm.config.dt)
-        self._poses[k] = pose_of(message)
+        self._poses[k] = (pose_of(message), stamp)
         self._ready(k)
 
     def _on_camera(self, message: String) -> None:
@@ -285,14 +305,15 @@ class MemberNode(Node):
     def _ready(self, k: int) -> None:
         if k in self._poses and k in self._cameras:
             for old in [s for s in self._poses if s <= k]:
-                pose = self._poses.pop(old)
+                pose, stamp = self._poses.pop(old)
             visible = self._cameras.pop(k)
             for old in [s for s in self._cameras if s < k]:
                 del self._cameras[old]
-            self.step(k, pose, visible)
+            self.step(k, pose, visible, stamp)
 
-    def step(self, k: int, pose: Pose, visible: list[tuple[int, float, float]]) -> None:
-        """Step k: monitoring, then every running behaviour; exactly one `cmd_vel`."""
+    def step(self, k: int, pose: Pose, visible: list[tuple[int, float, float]], stamp: Any) -> None:
+        """Step k: monitoring, then every running behaviour; exactly one `cmd_vel`, stamped
+        with the pose's `stamp` (the step it answers), then the member has acted on k."""
         self.pose, self.t = pose, k * self.swarm.config.dt
         self.swarm.k = max(self.swarm.k, k)
         if self.monitor is not None:
@@ -312,9 +333,13 @@ class MemberNode(Node):
             self.check(activity)
         if mover is not None and mover.controller.done is not None:
             command = ZERO
-        twist = Twist()
-        twist.linear.x, twist.linear.y, twist.linear.z = command.vx, command.vy, command.vz
-        self._cmd.publish(twist)
+        answer = TwistStamped()
+        answer.header.stamp = stamp
+        answer.header.frame_id = "map"
+        linear = answer.twist.linear
+        linear.x, linear.y, linear.z = command.vx, command.vy, command.vz
+        self._cmd.publish(answer)
+        self.swarm.acted(self.name, k)
 
 
 def serve(config: ServersConfig) -> int:

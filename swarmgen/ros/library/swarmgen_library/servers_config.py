@@ -1,7 +1,7 @@
 """The servers file (JSON) the behaviour servers read: members, their behaviours' declared
 interfaces and algorithms, the swarm's event type and topics, the algorithms' parameters.
 
-    {"dt": 0.1, "area": {"width": 66, "height": 66}, "seed": 1,
+    {"dt": 0.1, "area": {"width": 66, "height": 66}, "seed": 1, "name": "servers_uav",
      "events": {"type": "search_and_rescue_interfaces/msg/Event", "topic": "/swarm/events",
                 "declared": ["targetFound", "targetAssigned", "targetRescued"]},
      "auction_topic": "/swarm/auction",
@@ -12,6 +12,8 @@ interfaces and algorithms, the swarm's event type and topics, the algorithms' pa
                                              "algorithm": "TakeOff", "params": {}}}}]}
 
 `algorithm` defaults to the behaviour's name; a behaviour's `params` override the file's.
+`name` is the `by` of the process's step reports (default `servers_` + the first member's
+namespace): stable from run to run, and distinct for processes serving disjoint members.
 Everything is checked here; a bad file raises `ConfigError` naming the member and behaviour.
 """
 
@@ -78,6 +80,7 @@ class ServersConfig:
     auction_topic: str
     members: tuple[MemberConfig, ...]
     params: dict[str, float] = field(default_factory=dict)
+    name: str = "servers"
 
 
 def _number(where: str, value: Any) -> float:
@@ -161,6 +164,7 @@ def parse(raw: Any) -> ServersConfig:
         auction_topic=str(raw.get("auction_topic", "/swarm/auction")),
         members=members,
         params=params,
+        name=str(raw.get("name") or f"servers_{members[0].namespace}"),
     )
 
 

@@ -7,8 +7,9 @@ Rules (docs/detailed.md, "The world"):
   UGVs stay at z = 0.
 - A command is clipped to the robot's `max_speed`: the horizontal norm (direction kept), and the
   vertical part to +-max_speed. It is held until the next command.
-- A camera sees the closed disc of radius `fov_radius` around the body's (x, y), at any
-  altitude. Coverage: the area is divided into square cells of side `cell`; a cell is covered
+- A camera sees the closed disc of radius `fov_radius` around the body's (x, y); a UAV's only
+  while it is airborne (z >= `airborne_z`; 0, the default, means always), a UGV's always.
+  Coverage: the area is divided into square cells of side `cell`; a cell is covered
   at the first step at which its centre lies in the disc of a UAV's camera (step 0 included,
   the start). A detection: a target that is in a camera's disc after a step and was not after
   the previous one (per robot); the world keeps each target's first detection time.
@@ -71,12 +72,15 @@ class WorldSpec:
     targets: tuple[TargetSpec, ...] = ()
     cell: float = 1.0
     dt: float = 0.1
+    airborne_z: float = 0.0  # a UAV's camera sees only at z >= this (a UAV on the ground: blind)
 
     def __post_init__(self) -> None:
         """Refuse duplicate names or ids, starts and targets outside the area, and a cell size
         that does not divide the area into whole cells."""
         positive("dt", self.dt)
         positive("cell", self.cell)
+        if finite("airborne_z", self.airborne_z) < 0:
+            raise ValueError(f"airborne_z must be >= 0, got {self.airborne_z}")
         names = [r.name for r in self.robots]
         if len(set(names)) != len(names):
             raise ValueError(f"robot names must be unique: {names}")
@@ -118,15 +122,22 @@ class Detection:
 class _Body:
     """The mutable state of one robot (slots: the step loop reads these millions of times)."""
 
-    __slots__ = ("camera", "cmd", "in_view", "radius", "spec", "x", "y", "z")
+    __slots__ = ("camera", "cmd", "in_view", "min_z", "radius", "spec", "x", "y", "z")
 
-    def __init__(self, spec: RobotSpec) -> None:
+    def __init__(self, spec: RobotSpec, airborne_z: float) -> None:
         self.spec = spec
         self.x, self.y, self.z = float(spec.x), float(spec.y), float(spec.z)
         self.cmd = Command()
         self.camera = spec.fov_radius is not None
         self.radius = spec.fov_radius or 0.0
         self.in_view = NONE
+        # the lowest z its camera sees from: a UGV's camera is always on (it stays at z = 0)
+        self.min_z = airborne_z if spec.kind == "uav" else 0.0
+
+    @property
+    def looking(self) -> bool:
+        """Whether its camera sees now (switched on, and airborne for a UAV)."""
+        return self.camera and self.z >= self.min_z
 
 
 class World:
@@ -139,7 +150,7 @@ class World:
         self.dt = spec.dt
         self.steps = 0
         self.nx, self.ny = spec.cells_across()
-        self._bodies = {r.name: _Body(r) for r in spec.robots}
+        self._bodies = {r.name: _Body(r, spec.airborne_z) for r in spec.robots}
         self._order = [self._bodies[r.name] for r in spec.robots]
         self._cell_step = [-1] * (self.nx * self.ny)  # first step a cell was covered
         self.covered_cells = 0
@@ -217,7 +228,8 @@ class World:
         t = self.time
         found: list[Detection] = []
         for body in self._order:
-            if not body.camera:
+            if not body.looking:
+                body.in_view = NONE  # seen again once it looks: a new detection then
                 continue
             self._cover(body)
             now = self._seen_by(body)
@@ -251,7 +263,7 @@ class World:
 
     def _cover(self, body: _Body) -> None:
         """Mark the cells whose centres the UAV's camera disc holds."""
-        if not body.camera or body.spec.kind != "uav":
+        if not body.looking or body.spec.kind != "uav":
             return
         c, r2 = self.spec.cell, body.radius * body.radius
         x, y, nx, cells = body.x, body.y, self.nx, self._cell_step
@@ -267,7 +279,7 @@ class World:
 
     def _seen_by(self, body: _Body) -> frozenset[int]:
         """The ids of the targets in the body's camera disc (buckets: the cells it overlaps)."""
-        if not body.camera or not self._buckets:
+        if not body.looking or not self._buckets:
             return NONE
         c, r = self.spec.cell, body.radius
         x, y, r2 = body.x, body.y, r * r

@@ -6,7 +6,7 @@ topics), waits for one stamped `cmd_vel` per served robot and one report per rep
 `step_timeout_s`), settles when a report asks, steps the world, and goes on as fast as the
 answers come (not paced by the wall clock). It writes the result file atomically and exits 0
 when the stop condition holds, 1 on SIGINT/SIGTERM (the result marked partial), 2 on a bad world
-file (one line, no traceback). The protocol: docs/detailed.md, "The ROS step"; the node and its
+file or an output that cannot be written (one line, no traceback). The protocol: docs/detailed.md, "The ROS step"; the node and its
 file: "The world node".
 """
 
@@ -60,8 +60,7 @@ class WorldNode:
         self.executor.add_node(self.node)
         string = _msg("std_msgs", "String")
         pose = _msg("geometry_msgs", "PoseStamped")
-        stamped = config.cmd_type == "twist_stamped"
-        twist = _msg("geometry_msgs", "TwistStamped" if stamped else "Twist")
+        twist = _msg("geometry_msgs", "TwistStamped")
         self._string = string
         self.clock_msg = _msg("rosgraph_msgs", "Clock")()
         self.clock_pub = self.node.create_publisher(type(self.clock_msg), "/clock", qos)
@@ -92,13 +91,7 @@ class WorldNode:
             stamp, linear = msg.header.stamp, msg.twist.linear
             run.answer(robot, stamp.sec * NS_PER_S + stamp.nanosec, linear.x, linear.y, linear.z)
 
-        def on_twist(msg: Any) -> None:
-            # unstamped (`cmd_type` "twist"): taken for the step it arrives in; a late answer
-            # after a timeout then shifts this robot's commands by a step (docs/detailed.md)
-            linear = msg.linear
-            run.answer(robot, run.t_ns, linear.x, linear.y, linear.z)
-
-        return on_cmd if self.config.cmd_type == "twist_stamped" else on_twist
+        return on_cmd
 
     def _on_report(self, msg: Any) -> None:
         self.run.report(msg.data)
@@ -232,7 +225,8 @@ def _executor(config: WorldFile, context: Any) -> Any:
 
 
 def run_world(config: WorldFile) -> int:
-    """Run one world file to its end; the exit code (0 complete, 1 interrupted)."""
+    """Run one world file to its end; the exit code (0 complete, 1 interrupted, 2 the result
+    could not be written)."""
     import rclpy
     from rclpy.signals import SignalHandlerOptions
 
@@ -253,7 +247,13 @@ def run_world(config: WorldFile) -> int:
     except Interrupted:
         reason = "signal"
     wall_s = time.monotonic() - started
-    write_atomic(config.output, node.run.result(reason, wall_s))
+    code = 1 if reason == "signal" else 0
+    try:
+        write_atomic(config.output, node.run.result(reason, wall_s))
+    except OSError as err:  # checked at the start; gone since (disk full, folder removed)
+        print(f"world: output: cannot write {config.output}: {err.strerror or err}",
+              file=sys.stderr)  # fmt: skip
+        code = 2
     # the result is safe; a teardown that wedges in rcl (seen once, with the single-threaded
     # executor) must not keep the process: dump where it hangs and exit
     faulthandler.dump_traceback_later(TEARDOWN_S, exit=True)
@@ -263,7 +263,7 @@ def run_world(config: WorldFile) -> int:
     faulthandler.cancel_dump_traceback_later()
     for signum, handler in previous.items():  # a signal in the teardown changes nothing now
         signal.signal(signum, handler)
-    return 1 if reason == "signal" else 0
+    return code
 
 
 def main(argv: Sequence[str] | None = None) -> int:

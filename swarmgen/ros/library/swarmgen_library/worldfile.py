@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,6 +18,7 @@ from .geometry import Area
 from .world import RobotSpec, TargetSpec, WorldSpec
 
 NS_PER_S = 1_000_000_000
+AIRBORNE_Z = 0.5  # metres: a UAV's camera sees from this altitude up (on the ground: blind)
 
 
 class WorldFileError(ValueError):
@@ -103,12 +105,14 @@ def parse(raw: Any, base: Path = Path(".")) -> WorldFile:
             targets,
             cell=top.number("cell", 1.0, positive=True),
             dt=dt,
+            airborne_z=top.number("airborne_z", AIRBORNE_Z, low=0.0),
         )
     except ValueError as err:  # the core names the robot, target or field
         raise WorldFileError(str(err)) from None
     output = top.get("output")
     if not isinstance(output, str) or not output:
         raise WorldFileError("output: must be a file path (string)")
+    writable(base / output)
     return WorldFile(
         spec=spec,
         topics=tuple(topics),
@@ -122,8 +126,24 @@ def parse(raw: Any, base: Path = Path(".")) -> WorldFile:
         status_every=top.integer("status_every", 10, low=1),
         sample_every=top.integer("sample_every", 1, low=1),
         executor=_choice(top.raw, "executor", ("events", "single")),
-        cmd_type=_choice(top.raw, "cmd_type", ("twist_stamped", "twist")),
+        # one value left: plain Twist answers (no stamp) were dropped with the old servers
+        cmd_type=_choice(top.raw, "cmd_type", ("twist_stamped",)),
     )
+
+
+def writable(path: Path) -> None:
+    """WorldFileError unless the result can be written at `path` (checked before the run, so
+    a run never ends without its result): the nearest existing folder must be a writable
+    folder, and `path` not a folder."""
+    folder = path.parent
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    if path.is_dir():
+        raise WorldFileError(f"output: cannot write {path}: it is a folder")
+    if not folder.is_dir():
+        raise WorldFileError(f"output: cannot write {path}: {folder} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):  # the file is replaced: its folder counts
+        raise WorldFileError(f"output: cannot write {path}: permission denied")
 
 
 def _choice(raw: dict[str, Any], key: str, names: tuple[str, ...]) -> str:

@@ -1,0 +1,109 @@
+"""The detailed level end to end (real rclpy, Fast DDS on loopback, no mocks): `swarmgen simulate
+--level detailed` runs the SAR sample's generated nodes, unmodified, against the behaviour
+library and the world node in a small world (2 UAVs, 1 UGV, one target): the target is found and
+rescued, the results are the abstract level's files, and a killed world node ends the run as failed, with nothing left running.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+pytest.importorskip("rclpy", reason="rclpy comes with the `ros` extra: run `make ros`")
+pytest.importorskip("psutil", reason="psutil comes with the `ros` extra: run `make ros`")
+
+import psutil
+
+from tests.conftest import ROOT
+from tests.hostile import swarmgen
+
+SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
+SMALL = ROOT / "tests" / "fixtures" / "detailed" / "small_sar.json"
+
+
+def _simulate(tmp: Path, name: str, *extra: str, timeout: float = 240) -> Any:
+    return swarmgen(
+        "simulate", SAR, "--scenario", SMALL, "--level", "detailed",
+        "-o", tmp / f"{name}-out", "--keep-runs", tmp / f"{name}-runs", *extra,
+        cwd=tmp, timeout=timeout,
+    )  # fmt: skip
+
+
+def _results(tmp: Path, name: str) -> dict[str, Any]:
+    return json.loads((tmp / f"{name}-out" / "results.json").read_text(encoding="utf-8"))
+
+
+def _world_results(tmp: Path, name: str) -> list[dict[str, Any]]:
+    found = []
+    for path in sorted((tmp / f"{name}-runs").glob("run-*/result.json")):
+        result = json.loads(path.read_text(encoding="utf-8"))
+        result.pop("wall")
+        found.append(result)
+    return found
+
+
+def _leftovers(root: Path) -> list[str]:
+    """Processes of the runs still alive (their ROS logs are under `root`)."""
+    alive = []
+    for proc in psutil.process_iter(["pid", "cmdline", "environ"]):
+        try:
+            if (proc.info["environ"] or {}).get("ROS_LOG_DIR", "").startswith(str(root)):
+                alive.append(" ".join(proc.info["cmdline"] or []))
+        except (psutil.NoSuchProcess, psutil.AccessDenied):
+            continue
+    return alive
+
+
+def test_the_generated_swarm_rescues_in_the_detailed_world(tmp_path: Path) -> None:
+    first = _simulate(tmp_path, "a")
+    assert first.exit == 0, first
+    results = _results(tmp_path, "a")
+    assert results["level"] == "detailed"
+    [run] = results["runs"]
+    assert run["reason"] == "rescued" and run["errors"] == [], run
+    found, rescued = run["found"][0], run["rescued"][0]
+    assert found is not None and rescued is not None and 0 < found < rescued, run
+    [record] = results["detailed"]["runs"]
+    assert record["failure"] is None and record["timeouts"] == 0, record
+    assert record["real_time_factor"] > 1, record  # simulated time runs ahead of the wall
+    for name in ("coverage.csv", "search.csv", "rescue.csv", "runs.csv"):
+        assert (tmp_path / "a-out" / name).is_file(), name
+    assert _leftovers(tmp_path) == []
+
+
+def test_a_killed_world_node_fails_the_run_and_stops_everything(tmp_path: Path) -> None:
+    killed: list[int] = []
+
+    def kill_the_world() -> None:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and not killed:
+            for proc in psutil.process_iter(["pid", "cmdline", "environ"]):
+                try:
+                    line = " ".join(proc.info["cmdline"] or [])
+                    mine = (proc.info["environ"] or {}).get("ROS_LOG_DIR", "")
+                except (psutil.NoSuchProcess, psutil.AccessDenied):
+                    continue
+                if "swarmgen_library.world_node" in line and mine.startswith(str(tmp_path)):
+                    time.sleep(0.5)  # let it step a little
+                    os.kill(proc.info["pid"], signal.SIGKILL)
+                    killed.append(proc.info["pid"])
+                    return
+            time.sleep(0.05)
+
+    killer = threading.Thread(target=kill_the_world)
+    killer.start()
+    outcome = _simulate(tmp_path, "k")
+    killer.join()
+    assert killed, "the world node was never seen"
+    assert outcome.exit == 1, outcome
+    assert "failed: the world node exited with -9" in outcome.stderr, outcome.stderr
+    [run] = _results(tmp_path, "k")["runs"]
+    assert run["reason"] == "failed" and "world node exited" in run["errors"][0], run
+    assert _leftovers(tmp_path) == []
