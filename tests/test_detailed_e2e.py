@@ -1,7 +1,8 @@
 """The detailed level end to end (real rclpy, Fast DDS on loopback, no mocks): `swarmgen simulate
 --level detailed` runs the SAR sample's generated nodes, unmodified, against the behaviour
 library and the world node in a small world (2 UAVs, 1 UGV, one target): the target is found and
-rescued, the results are the abstract level's files, and a killed world node ends the run as failed, with nothing left running.
+rescued, the results are the abstract level's files, two runs are identical to the step (the
+exact lockstep barrier), and a killed world node ends the run as failed, with nothing left running.
 """
 
 from __future__ import annotations
@@ -26,13 +27,16 @@ from tests.hostile import swarmgen
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 SMALL = ROOT / "tests" / "fixtures" / "detailed" / "small_sar.json"
+# ROS domains of this test run's detailed runs: apart from the runner's default (140-199), which
+# another session's `simulate --level detailed` may use at the same time
+DOMAIN = str(215 + os.getpid() % 15)
 
 
 def _simulate(tmp: Path, name: str, *extra: str, timeout: float = 240) -> Any:
     return swarmgen(
         "simulate", SAR, "--scenario", SMALL, "--level", "detailed",
         "-o", tmp / f"{name}-out", "--keep-runs", tmp / f"{name}-runs", *extra,
-        cwd=tmp, timeout=timeout,
+        cwd=tmp, timeout=timeout, env={"SWARMGEN_DETAILED_DOMAIN": DOMAIN},
     )  # fmt: skip
 
 
@@ -75,6 +79,19 @@ def test_the_generated_swarm_rescues_in_the_detailed_world(tmp_path: Path) -> No
     assert record["real_time_factor"] > 1, record  # simulated time runs ahead of the wall
     for name in ("coverage.csv", "search.csv", "rescue.csv", "runs.csv"):
         assert (tmp_path / "a-out" / name).is_file(), name
+    assert _leftovers(tmp_path) == []
+
+
+def test_two_detailed_runs_are_identical_to_the_step(tmp_path: Path) -> None:
+    """The barrier makes the generated swarm's reactions part of the lockstep: the world result
+    files agree outside `wall`, and so do the runs of results.json."""
+    for name in ("r1", "r2"):
+        outcome = _simulate(tmp_path, name)
+        assert outcome.exit == 0, outcome
+    first, second = _world_results(tmp_path, "r1"), _world_results(tmp_path, "r2")
+    assert first and first == second, (first, second)
+    assert first[0]["timeouts"] == 0 and first[0]["barrier_timeouts"] == 0, first
+    assert _results(tmp_path, "r1")["runs"] == _results(tmp_path, "r2")["runs"]
     assert _leftovers(tmp_path) == []
 
 

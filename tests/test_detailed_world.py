@@ -131,7 +131,9 @@ def test_a_driver_that_stops_answering_gives_timeouts_not_a_hang(tmp_path: Path)
     code, err, result, _ = run(tmp_path, world, driver)
     assert code == 0, err[-2000:]
     assert result["complete"] and result["steps"] == 20
-    assert result["timeouts_by_robot"] == {"uav_1": 14}  # steps 6..19
+    # steps 6..19 time out for sure; on a loaded machine an early answer may miss the 50 ms too
+    timeouts = result["timeouts_by_robot"]["uav_1"]
+    assert 14 <= timeouts <= 20, result["timeouts_by_robot"]
     assert result["unserved"] == []  # its publisher is still there: waited for every step
     # the held command keeps it moving: x = 1 + 20 * 0.125
     assert result["samples"][-1][0] == 20

@@ -71,6 +71,7 @@ ROS_RUNTIME_MODULES = (
     "spec",
     "messages",
     "scheduler",
+    "lockstep",
     "convert",
     "bindings",
     "declared",

@@ -76,8 +76,6 @@ def simulate(
     from swarmgen.sim import run as sim_run
 
     check_record(record)
-    if level == "detailed" and record is not None:
-        raise click.UsageError("--record: the detailed level records no bags yet")
     if level == "abstract" and keep_runs is not None:
         raise click.UsageError("--keep-runs is for --level detailed")
     started = time.perf_counter()
@@ -87,7 +85,9 @@ def simulate(
     if level == "detailed":
         from swarmgen.sim.detailed.main import simulate_detailed
 
-        sim, files = simulate_detailed(model, chosen, output, workers, progress, keep_runs)
+        sim, files = simulate_detailed(
+            model, chosen, output, workers, progress, keep_runs, record, storage
+        )
     else:
         sim, files = sim_run.simulate_model(
             model, chosen, output, workers, progress, record, storage

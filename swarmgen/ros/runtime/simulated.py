@@ -122,7 +122,7 @@ class SimulatedBehaviours(Node):
         self.scripts = load_scripts(defaults, self.spec.chart_name, source)
         self.events = dict(events)
         self.interfaces = Interfaces(self.spec.interfaces)
-        self.scheduler = scheduler or Scheduler(self)
+        self.scheduler = scheduler if scheduler is not None else Scheduler(self)
         self.started: list[tuple[str, str]] = []  # (behaviour, "started" | outcome)
         self.errors: list[str] = []  # script failures (each aborted a goal or an emission)
         self._ids = itertools.count(EMITTED_ID_BASE)

@@ -49,10 +49,12 @@ def simulate_detailed(
     workers: int = 1,
     progress: Callable[[int, int], None] | None = None,
     keep: Path | None = None,
+    record: Path | None = None,
+    storage: str = "mcap",
 ) -> tuple[Simulation, dict[str, bytes]]:
     """Every configuration and repetition of `scenario` as a detailed run; the same result
     files as the abstract level (`keep`: a new directory to keep every run's files and logs
-    in; by default they are removed)."""
+    in; by default they are removed; `record`: a new directory for one bag per run)."""
     if out_dir is not None:
         outtree.preflight(out_dir, "simulate")
     params = detailed_params(scenario)
@@ -67,7 +69,10 @@ def simulate_detailed(
         planner = Planner(validation.model, validation.charts, validation.interfaces,
                           scenario, params)  # fmt: skip
         with _signals_interrupt():
-            runs = run_all(workspace, planner, configs, scenario.reps, workers, progress)
+            bags = None if record is None else (record, storage)
+            if record is not None:
+                record.mkdir(parents=True)
+            runs = run_all(workspace, planner, configs, scenario.reps, workers, progress, bags)
     finally:
         if keep is None:
             shutil.rmtree(root, ignore_errors=True)

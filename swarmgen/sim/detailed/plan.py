@@ -35,6 +35,8 @@ from swarmgen.sim.scenario import Scenario, SimulationError
 
 FLYING = "TakeOff"  # calling it makes a member type a uav
 POSE_TYPE = "geometry_msgs/msg/PoseStamped"
+SERVERS_NAME = "servers"  # the `by` of the servers' barrier reports
+LAUNCHER_NAME = "swarm_launcher"  # the launcher's station node: the swarm's reporter
 
 
 @dataclass(frozen=True)
@@ -98,10 +100,12 @@ class Planner:
                 for n, (x, y) in enumerate(targets)
             ],
             "stop": self._stop(bool(targets)),
-            "settle_s": params.settle_s, "settle_reporters": 1, "output": "result.json",
+            "settle_s": params.settle_s, "output": "result.json",
+            # the exact barrier: the servers process and the swarm launcher's reporter
+            "reporters": [SERVERS_NAME, LAUNCHER_NAME],
         }  # fmt: skip
         servers = {
-            "dt": params.dt, "area": world["area"], "seed": key,
+            "dt": params.dt, "area": world["area"], "seed": key, "name": SERVERS_NAME,
             "events": {
                 "type": f"{interfaces_package(self.model)}/msg/Event", "topic": "/swarm/events",
                 "declared": sorted(e.name for e in self.model.events),
@@ -109,7 +113,7 @@ class Planner:
             "params": dict(params.library), "members": members,
         }  # fmt: skip
         counts = dict(config.counts)
-        launcher = ["--no-simulation", "--trace"]
+        launcher = ["--no-simulation", "--trace", "--events"]
         for kind in self.kinds.values():
             launcher += [f"--{kind.module}", str(counts.get(kind.member_type, 0))]
         station = ",".join(f"{s.event}@{params.seconds(s.tick):g}" for s in scenario.station)

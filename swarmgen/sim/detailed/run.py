@@ -14,7 +14,6 @@ the guilty log, never dropped.
 from __future__ import annotations
 
 import json
-import queue
 import sys
 import tempfile
 import threading
@@ -28,13 +27,14 @@ from typing import Any
 from swarmgen import pipeline
 from swarmgen import ros_harness as harness
 from swarmgen.sim.batch import Config
+from swarmgen.sim.detailed.bags import record_run
+from swarmgen.sim.detailed.domains import lease
 from swarmgen.sim.detailed.plan import Planner, RunPlan
 from swarmgen.sim.detailed.procs import ProcessGroup
 from swarmgen.sim.scenario import SimulationError
 
 LIBRARY_ROOT = Path(__file__).resolve().parents[2] / "ros" / "library"  # the ament package
 START_LIMIT_S = 60.0  # for the swarm to enter its initial configuration
-DOMAINS = range(140, 200)  # ROS domains of concurrent runs (one each)
 CANCELLED = "cancelled (interrupted)"
 
 
@@ -81,9 +81,11 @@ def run_one(
     domain: int,
     limit_s: float,
     cancel: threading.Event,
+    bag: tuple[Path, str] | None = None,
 ) -> DetailedRun:
     """One repetition (`where`: configuration, repetition) as real processes (the module
-    docstring); never raises for a bad run; `cancel` (Ctrl-C) stops it at once."""
+    docstring); never raises for a bad run; `cancel` (Ctrl-C) stops it at once; `bag`: (a new
+    bag directory, its storage) to record the swarm's trace into."""
     config, rep = where
     here = Path(tempfile.mkdtemp(prefix=f"run-c{config}-r{rep}-", dir=workspace.root))
     (here / "world.json").write_text(json.dumps(plan.world), encoding="utf-8")
@@ -102,7 +104,8 @@ def run_one(
             "servers", [python, "-m", "swarmgen_library.servers", "servers.json"], env, here
         )
         swarm = [python, "-m", f"{plan.package}.launch_swarm", *plan.launcher,
-                 "--ros-args", "-p", "use_sim_time:=true"]  # fmt: skip
+                 "--ros-args", "-p", "use_sim_time:=true",
+                 "-p", "lockstep_topic:=/world/settle"]  # fmt: skip
         group.start("swarm", swarm, env, here)
         run.failure = _await_members(group, plan.members, START_LIMIT_S, cancel)
         if run.failure is None:
@@ -111,6 +114,8 @@ def run_one(
             run.failure = _await_world(group, limit_s, cancel)
         run.logs = {s.name: s.tail() for s in group.started}
     run.wall_s = time.monotonic() - started
+    if bag is not None and not cancel.is_set():
+        record_run(here / "logs" / "swarm.log", *bag)
     if run.failure is None:
         run.result, run.failure = _read_result(here / "result.json")
     return run
@@ -171,15 +176,14 @@ def run_all(
     reps: int,
     workers: int,
     progress: Callable[[int, int], None] | None = None,
+    record: tuple[Path, str] | None = None,
 ) -> list[DetailedRun]:
     """Every (configuration, repetition), `workers` at a time, each in a ROS domain no other
-    running run has; in (configuration, repetition) order. Ctrl-C stops every run's processes
-    before it propagates."""
+    running run on this machine has (`domains.lease`); in (configuration, repetition) order. Ctrl-C stops every run's processes
+    before it propagates. `record`: (a new directory, the bag storage) for one bag per run,
+    `DIR/<configuration>-<rep>` as at the abstract level."""
     jobs = [(c, r) for c in range(len(configs)) for r in range(reps)]
-    workers = max(1, min(workers, len(jobs), len(DOMAINS)))
-    free: queue.SimpleQueue[int] = queue.SimpleQueue()
-    for domain in list(DOMAINS)[:workers]:
-        free.put(domain)
+    workers = max(1, min(workers, len(jobs)))
     cancel = threading.Event()
     done: list[DetailedRun] = []
     if progress is not None:
@@ -188,13 +192,12 @@ def run_all(
     def job(number: int) -> DetailedRun:
         config, rep = jobs[number]
         plan = planner.plan(configs[config], rep)
-        domain = free.get()
-        try:
-            return run_one(
-                workspace, plan, jobs[number], domain, planner.params.wall_limit_s, cancel
-            )
-        finally:
-            free.put(domain)
+        bag = None
+        if record is not None:
+            bag = (record[0] / f"{configs[config].slug()}-{rep:04d}", record[1])
+        with lease(cancel) as domain:
+            limit = planner.params.wall_limit_s
+            return run_one(workspace, plan, jobs[number], domain, limit, cancel, bag)
 
     pool = ThreadPoolExecutor(max_workers=workers)  # each run is its own processes
     try:

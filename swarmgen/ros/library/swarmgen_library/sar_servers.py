@@ -334,14 +334,21 @@ def attach(member: MemberNode) -> None:
 def _action(member: MemberNode, cfg: BehaviourConfig, kind: Any, factory: Factory) -> None:
     running: dict[bytes, Activity] = {}
 
+    counters = member.swarm.counters
+
     async def execute(handle: Any) -> Any:
+        counters.busy -= 1  # accepted, now executing
         activity = factory(member, cfg, handle.request)
+        counters.changed()
         key = bytes(handle.goal_id.uuid)
         running[key] = activity
         try:
             outcome = await member.run(activity)
         finally:
             running.pop(key, None)
+            counters.busy -= 1  # ended (`check`); the result goes out as this returns
+            counters.sent["result"] += 1
+            counters.changed()
         result = kind.Result()
         write_fields(result, activity.outputs())
         if outcome == SUCCEEDED or outcome not in STANDARD:
@@ -358,18 +365,33 @@ def _action(member: MemberNode, cfg: BehaviourConfig, kind: Any, factory: Factor
         activity = running.get(bytes(handle.goal_id.uuid))
         if activity is not None:
             member.preempt(activity)
+            counters.changed()
         return CancelResponse.ACCEPT
 
+    def accept(_goal: Any) -> GoalResponse:
+        counters.received["goal"] += 1
+        counters.sent["goal_response"] += 1  # sent as this returns
+        counters.busy += 1  # until `execute` starts, in a later executor turn
+        counters.changed()
+        return GoalResponse.ACCEPT
+
     ActionServer(member, kind, cfg.ros_name, execute,
-                 goal_callback=lambda _goal: GoalResponse.ACCEPT, cancel_callback=cancel)  # fmt: skip
+                 goal_callback=accept, cancel_callback=cancel)  # fmt: skip
 
 
 def _service(member: MemberNode, cfg: BehaviourConfig, kind: Any, factory: Factory) -> None:
+    counters = member.swarm.counters
+
     async def call(request: Any, response: Any) -> Any:
+        counters.received["request"] += 1
+        counters.changed()
         activity = factory(member, cfg, request)
         outcome = await member.run(activity)  # answered when the behaviour has ended
         write_fields(response, activity.outputs())
         write_fields(response, {"success": outcome == SUCCEEDED})
+        counters.busy -= 1  # ended (`check`); the response goes out as this returns
+        counters.sent["response"] += 1
+        counters.changed()
         return response
 
     member.create_service(kind, cfg.ros_name, call)

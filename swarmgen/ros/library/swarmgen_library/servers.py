@@ -35,6 +35,7 @@ from std_msgs.msg import String  # type: ignore[import-untyped,unused-ignore]
 from . import auction_bus
 from .auction import AuctionOpen, AuctionResult, Bid
 from .controllers import PREEMPTED, Controller
+from .counting import Counters
 from .geometry import ZERO, Command, Pose
 from .ros_fields import pose_dict, pose_of, write_fields
 from .servers_config import ConfigError, MemberConfig, ServersConfig, import_type, load
@@ -105,6 +106,12 @@ class Swarm(Node):
         self.event_type = import_type(config.event_type) if config.event_type else None
         self._ids: dict[str, Iterator[int]] = {}
         self._settle = self.create_publisher(String, "/world/settle", QOS)
+        self.counters = Counters(config.name, lambda text: self._settle.publish(String(data=text)))
+        self.create_subscription(String, "/world/settle/probe",
+                                 lambda m: self.counters.probe(m.data), QOS)  # fmt: skip
+        me = self.get_fully_qualified_name()
+        self._heard = (f"{config.event_topic}@{me}", f"{config.auction_topic}@{me}")
+        self.counters.listen(self._heard[1])
         self._rescue = self.create_publisher(String, "/world/rescue", QOS)
         self._auction = self.create_publisher(String, config.auction_topic, EVENTS_QOS)
         self.create_subscription(String, config.auction_topic, self._heard_auction, EVENTS_QOS)
@@ -113,6 +120,7 @@ class Swarm(Node):
             self.create_subscription(
                 self.event_type, config.event_topic, self._heard_event, EVENTS_QOS
             )
+            self.counters.listen(self._heard[0])
 
     def settle(self) -> None:
         """Something a member reacts to happened: the next step report asks the world to
@@ -128,9 +136,8 @@ class Swarm(Node):
             return
         for old in [s for s in self._acted if s <= k]:  # an older step never completes now
             del self._acted[old]
-        report = {"k": k, "by": self.config.name, "settle": self._pending}
-        self._pending = False
-        self._settle.publish(String(data=json.dumps(report)))
+        settle, self._pending = self._pending, False
+        self.counters.step_done(k, settle)
 
     def send(self, sender: str, name: str, data: dict[str, Any]) -> None:
         """A swarm event from `sender`, if the model declares `name` (and there is a type)."""
@@ -145,11 +152,13 @@ class Swarm(Node):
         if hasattr(message, "stamp"):
             message.stamp = self.get_clock().now().to_msg()
         self._events.publish(message)
+        self.counters.sent[self.config.event_topic] += 1
         self.settle()
 
     def send_auction(self, message: AuctionOpen | Bid | AuctionResult) -> None:
         """An auction message to every member (this process's included, through DDS)."""
         self._auction.publish(String(data=auction_bus.encode(message)))
+        self.counters.sent[self.config.auction_topic] += 1
         self.settle()
 
     def found(self, member: MemberNode, event: TargetEvent) -> None:
@@ -188,6 +197,7 @@ class Swarm(Node):
                 member.monitor.know(target_id)
 
     def _heard_event(self, message: Any) -> None:
+        self.counters.received[self._heard[0]] += 1
         try:
             data = json.loads(message.data) if message.data else {}
         except ValueError:
@@ -207,16 +217,18 @@ class Swarm(Node):
         for member in self.members.values():
             member.tell(lambda act: act.on_event(name, data))
         self.settle()
+        self.counters.changed()
 
     def _heard_auction(self, message: String) -> None:
+        self.counters.received[self._heard[1]] += 1
         item = auction_bus.decode(message.data)
-        if item is None:
-            return
-        if isinstance(item, AuctionOpen):
-            self.auctions[item.target_id] = item
-        for member in self.members.values():
-            member.tell(lambda act: act.on_auction(item))
-        self.settle()
+        if item is not None:
+            if isinstance(item, AuctionOpen):
+                self.auctions[item.target_id] = item
+            for member in self.members.values():
+                member.tell(lambda act: act.on_auction(item))
+            self.settle()
+        self.counters.changed()
 
 
 class MemberNode(Node):
@@ -253,6 +265,7 @@ class MemberNode(Node):
             message.header.frame_id = "map"
             message.header.stamp = self.get_clock().now().to_msg()
         publisher.publish(message)
+        self.swarm.counters.sent[publisher.topic_name] += 1
 
     async def run(self, activity: Activity) -> str:
         """Run a behaviour to its end: the outcome."""
@@ -276,6 +289,7 @@ class MemberNode(Node):
             return
         self.activities.remove(activity)
         activity.ended(outcome)
+        self.swarm.counters.busy += 1  # until its result is sent (a later executor turn)
         activity.future.set_result(outcome)
         self.swarm.settle()
 
@@ -357,7 +371,8 @@ def serve(config: ServersConfig) -> int:
     try:
         swarm = Swarm(config)
         nodes.append(swarm)
-        for index, member_config in enumerate(config.members, start=1):
+        # 0-based, over every member of the run in model order: the abstract world's index
+        for index, member_config in enumerate(config.members):
             member = MemberNode(swarm, member_config, index)
             swarm.members[member.name] = member
             nodes.append(member)

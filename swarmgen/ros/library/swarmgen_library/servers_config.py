@@ -89,6 +89,13 @@ def _number(where: str, value: Any) -> float:
     return float(value)
 
 
+def _seed(value: Any) -> int:
+    """The run key, exactly: a 64-bit integer does not survive a float (53 bits)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ConfigError(f"seed: a whole number >= 0 is needed, got {value!r}")
+    return value
+
+
 def _params(where: str, raw: Any, base: dict[str, float]) -> dict[str, float]:
     if not isinstance(raw, dict):
         raise ConfigError(f"{where}: params must be an object")
@@ -157,7 +164,7 @@ def parse(raw: Any) -> ServersConfig:
     return ServersConfig(
         dt=_number("dt", raw.get("dt", 0.1)),
         area=shape,
-        seed=int(_number("seed", raw.get("seed", 0))),
+        seed=_seed(raw.get("seed", 0)),
         event_type=str(events.get("type", "")),
         event_topic=str(events.get("topic", "/swarm/events")),
         declared_events=frozenset(events.get("declared", [])),

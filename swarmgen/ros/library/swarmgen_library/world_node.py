@@ -23,6 +23,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
+from .barrier import Barrier
 from .worldfile import NS_PER_S, WorldFile, WorldFileError, load
 from .worldrun import Run, write_atomic
 
@@ -66,6 +67,7 @@ class WorldNode:
         self.clock_pub = self.node.create_publisher(type(self.clock_msg), "/clock", qos)
         self.status_pub = self.node.create_publisher(string, "/world/status", qos)
         self.cmd_topics: dict[str, str] = {}
+        self.own: dict[str, int] = {}  # the barrier's channels the world sends on: counts
         self.outputs: list[tuple[str, Any, Any, list[Any]]] = []
         for topics in config.topics:
             ns = f"/{topics.namespace}"
@@ -76,11 +78,16 @@ class WorldNode:
             camera = self.node.create_publisher(string, f"{ns}/camera", qos)
             main = self.node.create_publisher(pose, f"{ns}/pose", qos)
             self.outputs.append((topics.name, message, camera, [main, *extra]))
+            for t in topics.pose_topics:  # reactive for the members: counted by the barrier
+                self.own[f"{ns}/{t}"] = 0
             self.cmd_topics[topics.name] = f"{ns}/cmd_vel"
             self.node.create_subscription(twist, f"{ns}/cmd_vel", self._on_cmd(topics.name), qos)
         self.node.create_subscription(string, "/world/settle", self._on_report, qos)
         self.node.create_subscription(string, "/world/rescue", self._on_rescue, qos)
-        self.reporters = config.settle_reporters
+        self.reporters = len(config.reporters) or config.settle_reporters
+        self.barrier = Barrier(config.reporters) if config.barrier else None
+        self.probe_pub = self.node.create_publisher(string, "/world/settle/probe", qos)
+        self.phase = "step"  # the barrier's phase of the current step: `clock`, then `step`
 
     # --- callbacks
 
@@ -94,7 +101,10 @@ class WorldNode:
         return on_cmd
 
     def _on_report(self, msg: Any) -> None:
-        self.run.report(msg.data)
+        if self.barrier is not None:
+            self.barrier.report(msg.data)  # a wave's report (older ones are dropped)
+        else:
+            self.run.report(msg.data)
 
     def _on_rescue(self, msg: Any) -> None:
         self.run.rescue(msg.data)
@@ -118,11 +128,14 @@ class WorldNode:
         the robots still missing then start unserved."""
 
         def ready() -> bool:
-            return not self._missing() and self._live_reporters() >= self.reporters
+            return (not self._missing() and self._live_reporters() >= self.reporters
+                    and self._counted_topics_matched())  # fmt: skip
 
         self.spin_until(ready, self.config.start_timeout_s)
         self.run.unserved = set(self._missing())
         self.reporters = min(self.reporters, self._live_reporters())
+        if self.barrier is not None:
+            self.reporters = 0  # the barrier waits for its reporters itself
 
     def _missing(self) -> list[str]:
         missing = []
@@ -130,6 +143,16 @@ class WorldNode:
             if pubs[0].get_subscription_count() == 0 or not self._served(name):
                 missing.append(name)
         return missing
+
+    def _counted_topics_matched(self) -> bool:
+        """With the barrier, every reporter hears the probes and every extra pose topic (counted:
+        members subscribe to it) has its subscriber: a step-0 message sent before the match
+        would be lost, a barrier timeout."""
+        if self.barrier is None:
+            return True
+        if self.probe_pub.get_subscription_count() < len(self.config.reporters):
+            return False  # a reporter that misses the first probe would not answer step 0
+        return all(p.get_subscription_count() > 0 for *_, pubs in self.outputs for p in pubs[1:])
 
     def _served(self, robot: str) -> bool:
         return self.node.count_publishers(self.cmd_topics[robot]) > 0
@@ -154,9 +177,21 @@ class WorldNode:
         run.begin_step()
         for name in [n for n in run.unserved if self._served(n)]:
             run.unserved.discard(name)  # a server came (back): wait for it again
-        if self.reporters < self.config.settle_reporters:
+        if self.barrier is None and self.reporters < self.config.settle_reporters:
             self.reporters = min(self.config.settle_reporters, self._live_reporters())
-        self.publish_step()
+        if self.barrier is not None:
+            # phase 1: the clock alone, and what the members do on it (timers, station events)
+            # settles first, so the servers hold those goals before they act on step k
+            self.publish_clock()
+            self.phase = "clock"
+            self.probe(self.barrier.begin(run.k, self.own))
+            if not self.spin_until(self._barrier_done, self.config.barrier_timeout_s):
+                self.barrier.timed_out()
+            self.publish_step(clock=False)
+            self.phase = "step"  # phase 2: the servers act on step k; the reactions settle
+            self.probe(self.barrier.next_phase(self.own))
+        else:
+            self.publish_step()
 
         def complete() -> bool:
             return not run.waiting_for() and len(run.reporters) >= self.reporters
@@ -164,9 +199,26 @@ class WorldNode:
         if not self.spin_until(complete, self.config.step_timeout_s):
             self._after_timeout()
         run.apply()
-        if run.settle and self.config.settle_s > 0:
+        if self.barrier is not None:
+            if not self.spin_until(self._barrier_done, self.config.barrier_timeout_s):
+                self.barrier.timed_out()
+        elif run.settle and self.config.settle_s > 0:
             self.spin_until(lambda: False, self.config.settle_s)
         run.advance()
+
+    def _barrier_done(self) -> bool:
+        """The barrier's decision on what has arrived; a new wave is asked for at once."""
+        assert self.barrier is not None
+        decision = self.barrier.decide()
+        if decision == "probe":
+            self.probe(self.barrier.wave.number)
+        return decision == "done"
+
+    def probe(self, wave: int) -> None:
+        """Ask every reporter for its report of `wave` of the current step."""
+        text = json.dumps({"k": self.run.k, "wave": wave, "t_ns": self.run.t_ns,
+                           "phase": self.phase})  # fmt: skip
+        self.probe_pub.publish(self._string(data=text))
 
     def _after_timeout(self) -> None:
         """A robot without any cmd_vel publisher is unserved from now on; a reporter that is
@@ -180,12 +232,19 @@ class WorldNode:
             run.report_timeouts += 1
             self.reporters = min(self.reporters, self._live_reporters())
 
-    def publish_step(self) -> None:
-        """`/clock`, then per robot its camera and its pose (on every pose topic)."""
-        run, world = self.run, self.run.world
-        sec, nanosec = divmod(run.t_ns, NS_PER_S)
+    def publish_clock(self) -> None:
+        """`/clock` at the current step."""
+        sec, nanosec = divmod(self.run.t_ns, NS_PER_S)
         self.clock_msg.clock.sec, self.clock_msg.clock.nanosec = sec, nanosec
         self.clock_pub.publish(self.clock_msg)
+
+    def publish_step(self, clock: bool = True) -> None:
+        """`/clock` (unless published already), then per robot its camera and its pose (on
+        every pose topic)."""
+        run, world = self.run, self.run.world
+        sec, nanosec = divmod(run.t_ns, NS_PER_S)
+        if clock:
+            self.publish_clock()
         k, t = run.k, world.time
         camera_msg = self._string()
         for name, message, camera, pubs in self.outputs:
@@ -198,6 +257,8 @@ class WorldNode:
             position.x, position.y, position.z = pose.x, pose.y, pose.z
             for pub in pubs:
                 pub.publish(message)
+        for topic in self.own:
+            self.own[topic] += 1
 
     def publish_status(self, final: bool) -> None:
         """The `/world/status` message (the final one is waited for: the node ends next)."""
@@ -206,6 +267,15 @@ class WorldNode:
             from rclpy.duration import Duration
 
             self.status_pub.wait_for_all_acked(Duration(seconds=1))
+
+    def result(self, reason: str, wall_s: float) -> dict[str, Any]:
+        """The run's result, with the barrier's timeouts (and, timing only, its waves)."""
+        result = self.run.result(reason, wall_s)
+        if self.barrier is not None:
+            result["barrier_timeouts"] = self.barrier.timeouts
+            result["wall"]["waves"] = self.barrier.waves  # how many depends on timing
+            result["wall"]["barrier_stuck"] = self.barrier.stuck[:20]
+        return result
 
     def close(self) -> None:
         """Destroy the node and the executor."""
@@ -249,7 +319,7 @@ def run_world(config: WorldFile) -> int:
     wall_s = time.monotonic() - started
     code = 1 if reason == "signal" else 0
     try:
-        write_atomic(config.output, node.run.result(reason, wall_s))
+        write_atomic(config.output, node.result(reason, wall_s))
     except OSError as err:  # checked at the start; gone since (disk full, folder removed)
         print(f"world: output: cannot write {config.output}: {err.strerror or err}",
               file=sys.stderr)  # fmt: skip

@@ -60,6 +60,13 @@ class WorldFile:
     sample_every: int = 1
     executor: str = "events"
     cmd_type: str = "twist_stamped"
+    reporters: tuple[str, ...] = ()  # the exact barrier's reporters (`by`); none: settling
+    barrier_timeout_s: float = 1.0
+
+    @property
+    def barrier(self) -> bool:
+        """Steps end on the exact barrier (docs/detailed.md, "The lockstep barrier")."""
+        return bool(self.reporters)
 
     @property
     def dt_ns(self) -> int:
@@ -128,7 +135,18 @@ def parse(raw: Any, base: Path = Path(".")) -> WorldFile:
         executor=_choice(top.raw, "executor", ("events", "single")),
         # one value left: plain Twist answers (no stamp) were dropped with the old servers
         cmd_type=_choice(top.raw, "cmd_type", ("twist_stamped",)),
+        reporters=_names(top.raw.get("reporters", [])),
+        barrier_timeout_s=top.number("barrier_timeout_s", 1.0, positive=True),
     )
+
+
+def _names(raw: Any) -> tuple[str, ...]:
+    """`reporters`: distinct non-empty strings."""
+    if not isinstance(raw, list) or not all(isinstance(n, str) and n for n in raw):
+        raise WorldFileError(f"reporters: must be a list of reporter names, got {raw!r}")
+    if len(set(raw)) != len(raw):
+        raise WorldFileError(f"reporters: names must be distinct, got {raw!r}")
+    return tuple(raw)
 
 
 def writable(path: Path) -> None:

@@ -13,6 +13,7 @@ import heapq
 import itertools
 import time
 from collections.abc import Callable
+from typing import Any
 
 from rclpy.node import Node
 from rclpy.timer import Timer
@@ -23,8 +24,8 @@ class Handle:
 
     __slots__ = ("callback", "cancelled", "when")
 
-    def __init__(self, when: float, callback: Callable[[], None]) -> None:
-        self.when = when
+    def __init__(self, when: int, callback: Callable[[], None]) -> None:
+        self.when = when  # integer nanoseconds on the scheduler's clock
         self.callback = callback
         self.cancelled = False
 
@@ -42,24 +43,42 @@ class Scheduler:
     """
 
     def __init__(self, node: Node) -> None:
-        self._heap: list[tuple[float, int, Handle]] = []
+        # deadlines in integer nanoseconds: a float deadline a rounding above a /clock stamp
+        # would fire one simulated step late, depending on when the timer was armed
+        self._heap: list[tuple[int, int, Handle]] = []
         self._order = itertools.count()
-        self._armed: float | None = None
+        self._armed: int | None = None
         self._logger = node.get_logger()
         self._timer: Timer = node.create_timer(3600.0, self._fire, autostart=False)
         self._clock = node.get_clock()
         self.simulated = bool(node.get_parameter("use_sim_time").value)
+        self.lockstep: Any = None  # the process's `lockstep.Lockstep`, when the barrier is on
 
     def now(self) -> float:
         """Seconds on the scheduler's clock (simulated under `use_sim_time`)."""
-        return self._clock.now().nanoseconds / 1e9 if self.simulated else time.monotonic()
+        return self.now_ns() / 1e9
+
+    def now_ns(self) -> int:
+        """Integer nanoseconds on the scheduler's clock."""
+        return int(self._clock.now().nanoseconds) if self.simulated else time.monotonic_ns()
 
     def call_later(self, delay: float, callback: Callable[[], None]) -> Handle:
         """Run `callback` in the executor after `delay` seconds (at once for 0 or less)."""
-        handle = Handle(self.now() + max(0.0, delay), callback)
+        handle = Handle(self.now_ns() + max(0, round(delay * 1e9)), callback)
         heapq.heappush(self._heap, (handle.when, next(self._order), handle))
         self._arm()
         return handle
+
+    def reached(self, t_ns: int) -> bool:
+        """The clock is at `t_ns` (nanoseconds) or later."""
+        return bool(self._clock.now().nanoseconds >= t_ns)
+
+    def due(self) -> bool:
+        """A callback is due: the timer is ready, its callback has not run yet."""
+        if self._armed is None:
+            return False
+        left = self._timer.time_until_next_call()
+        return left is not None and left <= 0
 
     def __len__(self) -> int:
         return sum(1 for _, _, h in self._heap if not h.cancelled)
@@ -75,14 +94,13 @@ class Scheduler:
         when = self._heap[0][0]
         if self._armed is not None and self._armed <= when:
             return  # already armed for this deadline or an earlier one
-        delay = max(when - self.now(), 0.0)
-        self._timer.timer_period_ns = max(1000, int(delay * 1e9))
+        self._timer.timer_period_ns = max(1000, when - self.now_ns())
         self._timer.reset()
         self._armed = when
 
     def _fire(self) -> None:
         self._armed = None
-        now = self.now()
+        now = self.now_ns()
         while self._heap and self._heap[0][0] <= now:
             _, _, handle = heapq.heappop(self._heap)
             if handle.cancelled:
@@ -93,3 +111,5 @@ class Scheduler:
             except Exception as err:  # a failing callback must not stop the others
                 self._logger.error(f"scheduled callback failed: {err!r}")
         self._arm()
+        if self.lockstep is not None:
+            self.lockstep.check()  # what the callbacks did, reported at once

@@ -14,6 +14,7 @@ from typing import Any
 from rclpy.context import Context as RosContext
 from rclpy.node import Node
 
+from . import lockstep
 from .expressions import ScriptError
 from .messages import EVENTS_QOS, SWARM_TOPIC, Interfaces
 from .node import MemberNode
@@ -115,6 +116,10 @@ class Station(Node):
         self._ids = itertools.count(1)
         self.swarm_publisher = self.create_publisher(interfaces.Event, SWARM_TOPIC, EVENTS_QOS)
         self.create_subscription(interfaces.Event, SWARM_TOPIC, self._on_event, EVENTS_QOS)
+        # the process's barrier reporter (detailed level: `-p lockstep_topic:=/world/settle`)
+        self.lockstep = lockstep.start(self, self.scheduler, self.get_name())
+        self._heard = f"{self.swarm_publisher.topic_name}@{self.get_fully_qualified_name()}"
+        lockstep.listen(self.scheduler, self._heard)
 
     def publish(self, name: str, data: Mapping[str, Any] | None = None) -> None:
         """Send a station event on the swarm topic."""
@@ -127,8 +132,10 @@ class Station(Node):
                 json.dumps(dict(data or {})),
             )
         )
+        lockstep.sent(self.scheduler, self.swarm_publisher.topic_name)
 
     def _on_event(self, msg: Any) -> None:
+        lockstep.received(self.scheduler, self._heard)
         self.counts[msg.name] += 1
         self.first.setdefault(msg.name, self.scheduler.now() - self.started)
         if self.log is not None:

@@ -31,6 +31,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
 
 from .._runtime.chart import Node as ChartNode
+from . import lockstep
 from .bindings import DEFAULT_TIMEOUTS, Resolved, assignments, outcome_of, outputs_of
 from .convert import ConversionError, build
 from .scheduler import Handle, Scheduler
@@ -161,9 +162,16 @@ class DeclaredCalls:
             return self._node.create_client(item.type, ros_name)
         if mode == "publish":
             return self._node.create_publisher(item.type, ros_name, TOPIC_QOS)
-        return self._node.create_subscription(
-            item.type, ros_name, lambda message: self._on_message(name, message), TOPIC_QOS
-        )
+        heard: list[str] = []  # `<topic>@<node>`, once the subscription knows its topic
+
+        def on_message(message: Any) -> None:
+            lockstep.received(self._scheduler, heard[0])
+            self._on_message(name, message)
+
+        subscription = self._node.create_subscription(item.type, ros_name, on_message, TOPIC_QOS)
+        heard.append(f"{subscription.topic_name}@{self._node.get_fully_qualified_name()}")
+        lockstep.listen(self._scheduler, heard[0])
+        return subscription
 
     def handles(self, behaviour: str) -> bool:
         """The behaviour is a declared service or topic."""
@@ -231,7 +239,9 @@ class DeclaredCalls:
         for handle in (call.retry, call.deadline):
             if handle is not None:
                 handle.cancel()
-        if call.future is not None and not call.future.done():
+        # with the barrier on, the late response is still taken (and counted), then ignored
+        pending = call.future is not None and not call.future.done()
+        if pending and self._scheduler.lockstep is None:
             self._endpoints[call.resolved.behaviour.name].remove_pending_request(call.future)
 
     def _end(self, call: _Call, outcome: str, outputs: dict[str, Any]) -> None:
@@ -261,11 +271,13 @@ class DeclaredCalls:
             call.retry = self._scheduler.call_later(RETRY_S, lambda: self._call_service(call))
             return
         call.future = client.call_async(call.message)
+        lockstep.sent(self._scheduler, "request")
         name = call.resolved.behaviour.name
         call.request = self._requests[name] = self._requests.get(name, 0) + 1
         call.future.add_done_callback(lambda future: self._on_response(call, future))
 
     def _on_response(self, call: _Call, future: Future[Any]) -> None:
+        lockstep.received(self._scheduler, "response")
         if call.done:
             return
         error = future.exception()
@@ -301,6 +313,7 @@ class DeclaredCalls:
                 f"on {publisher.topic_name!r} within {timeout:g} s: published anyway"
             )
         publisher.publish(call.message)
+        lockstep.sent(self._scheduler, publisher.topic_name)
         self._scheduler.call_later(0.0, lambda: self._end(call, "succeeded", {}))
 
     def _on_message(self, behaviour: str, message: Any) -> None:

@@ -32,6 +32,7 @@ from .._runtime.chart import Call
 from .._runtime.chart import Node as ChartNode
 from .._runtime.engine import FINALIZE_PREFIX, Engine
 from .._runtime.engine import Event as SwarmEvent
+from . import lockstep
 from .bindings import (
     DEFAULT_TIMEOUTS,
     Resolved,
@@ -299,6 +300,7 @@ class GoalClient(Node):
             run.retry = self.scheduler.call_later(SERVER_RETRY_S, lambda: self._send_goal(run))
             return
         self.pending_requests += 1
+        lockstep.sent(self.scheduler, "goal")
         future = client.send_goal_async(
             run.goal, feedback_callback=lambda feedback: self._on_feedback(run, feedback)
         )
@@ -330,6 +332,7 @@ class GoalClient(Node):
             hook(record)
 
     def _on_goal_response(self, run: _Run, future: Future[Any]) -> None:
+        lockstep.received(self.scheduler, "goal_response")
         if run.answered:  # too late: the behaviour ended already
             handle = future.result() if future.exception() is None else None
             if handle is not None and handle.accepted:
@@ -356,6 +359,7 @@ class GoalClient(Node):
         handle.get_result_async().add_done_callback(lambda f: self._on_result(run, f))
 
     def _on_result(self, run: _Run, future: Future[Any]) -> None:
+        lockstep.received(self.scheduler, "result")
         if run.feedback is not None and not run.cancelled:
             run.feedback.flush()  # the last feedback comes before the outcome
         run.finished = True
@@ -420,9 +424,11 @@ class GoalClient(Node):
 
     def _cancel_goal(self, run: _Run) -> None:
         self.pending_cancels += 1
+        lockstep.sent(self.scheduler, "cancel")
 
         def answered(_: Future[Any]) -> None:
             self.pending_cancels -= 1
+            lockstep.received(self.scheduler, "cancel")
 
         run.handle.cancel_goal_async().add_done_callback(answered)
 

@@ -35,6 +35,7 @@ from .._runtime.chart import Node as ChartNode
 from .._runtime.chart import record
 from .._runtime.engine import Engine
 from .._runtime.engine import Event as SwarmEvent
+from . import lockstep
 from .bindings import BindingError
 from .goals import GoalClient
 from .messages import (
@@ -110,8 +111,12 @@ class MemberNode(GoalClient):
         self.spec = spec
         self.options = options
         self.interfaces = Interfaces(spec.interfaces)
-        self.scheduler = scheduler or Scheduler(self)
+        own = scheduler is None  # a process of its own (run_member): its own barrier reporter
+        # `is None`, not `or`: an empty Scheduler is falsy (`__len__`), and a shared one must stay
+        self.scheduler = scheduler if scheduler is not None else Scheduler(self)
         self._declare_parameters()
+        if own:
+            lockstep.start(self, self.scheduler, self.member_id)
         self.errors: list[str] = []
         self.steps = 0
         self.seen: dict[str, int] = {}  # sender -> id of the last swarm event processed
@@ -121,6 +126,8 @@ class MemberNode(GoalClient):
         self._queue: deque[SwarmEvent] = deque()
         self._draining = False
         self._model_timers: dict[str, Handle] = {}
+        if self.scheduler.lockstep is not None:
+            self.scheduler.lockstep.quiet.append(lambda: not self._queue and not self._draining)
         self._create_endpoints()
         self._started = False
         self.engine = self._new_engine()
@@ -130,7 +137,14 @@ class MemberNode(GoalClient):
         event_type = self.interfaces.Event
         self.swarm_publisher = self.create_publisher(event_type, SWARM_TOPIC, EVENTS_QOS)
         self._states = self.create_publisher(self.interfaces.ActiveStates, STATES_TOPIC, STATES_QOS)
-        self.create_subscription(event_type, SWARM_TOPIC, self._on_swarm_event, EVENTS_QOS)
+        heard = f"{self.swarm_publisher.topic_name}@{self.get_fully_qualified_name()}"
+        lockstep.listen(self.scheduler, heard)
+
+        def on_swarm(msg: Any) -> None:
+            lockstep.received(self.scheduler, heard)
+            self._on_swarm_event(msg)
+
+        self.create_subscription(event_type, SWARM_TOPIC, on_swarm, EVENTS_QOS)
         self.create_subscription(event_type, LOCAL_TOPIC, self._on_swarm_event, EVENTS_QOS)
         self._init_goals(self.spec.behaviours, self.options.check_outcomes)
 
@@ -244,6 +258,8 @@ class MemberNode(GoalClient):
                 self._after_step(current)
         finally:
             self._draining = False
+        if self.scheduler.lockstep is not None:
+            self.scheduler.lockstep.check()  # the queue is empty: report it at once
 
     def _after_step(self, event: SwarmEvent | None) -> None:
         self.steps += 1
@@ -287,6 +303,7 @@ class MemberNode(GoalClient):
         self.swarm_publisher.publish(
             self.interfaces.event(event.id, event.timestamp, event.sender, event.name, data)
         )
+        lockstep.sent(self.scheduler, self.swarm_publisher.topic_name)
 
     # --- engine host
 
