@@ -124,3 +124,42 @@ def test_a_killed_world_node_fails_the_run_and_stops_everything(tmp_path: Path) 
     [run] = _results(tmp_path, "k")["runs"]
     assert run["reason"] == "failed" and "world node exited" in run["errors"][0], run
     assert _leftovers(tmp_path) == []
+
+
+def _kill_when_running(root: Path, target: str, killed: list[int]) -> None:
+    """SIGKILL the run's `target` process (by module) once it and the world node are up."""
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        lines = {}
+        for proc in psutil.process_iter(["pid", "cmdline", "environ"]):
+            try:
+                if (proc.info["environ"] or {}).get("ROS_LOG_DIR", "").startswith(str(root)):
+                    lines[proc.info["pid"]] = " ".join(proc.info["cmdline"] or [])
+            except (psutil.NoSuchProcess, psutil.AccessDenied):
+                continue
+        pids = [pid for pid, line in lines.items() if target in line]
+        if pids and any("swarmgen_library.world_node" in line for line in lines.values()):
+            time.sleep(1.0)  # mid-run: the members' goals are on the servers
+            os.kill(pids[0], signal.SIGKILL)
+            killed.append(pids[0])
+            return
+        time.sleep(0.05)
+
+
+def test_killed_behaviour_servers_fail_the_run_and_stop_everything(tmp_path: Path) -> None:
+    """The servers process dies mid-run: the runner ends the run as failed, naming it (the
+    members' own server-loss check, `server_lost_s`, is tests/test_ros_server_loss.py)."""
+    killed: list[int] = []
+    killer = threading.Thread(
+        target=_kill_when_running, args=(tmp_path, "swarmgen_library.servers", killed)
+    )
+    killer.start()
+    outcome = _simulate(tmp_path, "s")
+    killer.join()
+    assert killed, "the servers process was never seen"
+    assert outcome.exit == 1, outcome
+    assert "servers exited during the run" in outcome.stderr, outcome.stderr
+    assert "-9" in outcome.stderr, outcome.stderr
+    [run] = _results(tmp_path, "s")["runs"]
+    assert run["reason"] == "failed" and "servers exited" in run["errors"][0], run
+    assert _leftovers(tmp_path) == []

@@ -15,6 +15,9 @@
 Outcomes are delivered from the executor (scheduler), never from inside the engine's step.
 Feedback of declared actions (`goals.py`) is coalesced here (`FeedbackGate`) into
 `FeedbackRecord`s, the trace records of kind `feedback`.
+A lost server (`ServerWatch`): a service call on its way, or a sent goal (`goals.py`), whose
+server has not been matched for `server_lost_s` (a node parameter, default 2 s, wall seconds;
+0: no check) ends `aborted` with a member error; a late answer is ignored.
 """
 
 from __future__ import annotations
@@ -25,6 +28,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from rclpy.clock import Clock
+from rclpy.clock_type import ClockType
 from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rclpy.task import Future
@@ -38,6 +43,9 @@ from .scheduler import Handle, Scheduler
 RETRY_S = 0.05  # how often a call waits for its service, or a message for its subscriber
 FEEDBACK_INTERVAL_S = 0.25  # at most one feedback record per goal this often (wall seconds)
 TOPIC_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+SERVER_LOST_PARAMETER = "server_lost_s"
+SERVER_LOST_S = 2.0
+WATCH_PERIOD_S = 0.25  # wall seconds between checks for lost servers, while any is watched
 # (state, activation, behaviour name, outcome, outputs)
 Finish = Callable[[ChartNode, int, str, str, dict[str, Any]], None]
 
@@ -107,6 +115,47 @@ class FeedbackGate:
         self._values, self._count = None, 0
 
 
+class ServerWatch:
+    """One node's check for lost servers: a steady-clock timer, running only while a goal or
+    a service call is on its way (`wake`). Wall time even under `use_sim_time`: a dead process
+    does not come back as simulated time passes, and `/clock` may stop while the detailed
+    level's world waits for an answer that will never come."""
+
+    def __init__(self, node: Node, check: Callable[[float, float], bool]) -> None:
+        """`check(now, limit)`: one round (monotonic seconds, `server_lost_s`); it returns
+        whether anything is still watched (else the timer stops until the next `wake`)."""
+        value: Any = node.declare_parameter(SERVER_LOST_PARAMETER, SERVER_LOST_S).value
+        self.limit = max(0.0, float(value))
+        self._check = check
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._timer = node.create_timer(WATCH_PERIOD_S, self._tick, clock=steady, autostart=False)
+        self._on = False
+
+    def wake(self) -> None:
+        """Something was sent: watch its server (nothing when `server_lost_s` is 0)."""
+        if self.limit > 0 and not self._on:
+            self._on = True
+            self._timer.reset()
+
+    def _tick(self) -> None:
+        if not self._check(time.monotonic(), self.limit):
+            self._timer.cancel()
+            self._on = False
+
+
+def unmatched_since(since: float | None, ready: bool, now: float) -> float | None:
+    """When the server was first seen unmatched in the current stretch (None: matched)."""
+    if ready:
+        return None
+    return now if since is None else since
+
+
+def lost(since: float | None, now: float, limit: float) -> bool:
+    """Unmatched for `limit` seconds: the ticks are WATCH_PERIOD_S apart, so the tick that
+    completes the limit may read a hair below it (a strict `>` would wait one more tick)."""
+    return since is not None and now - since >= limit - 1e-3
+
+
 @dataclass(eq=False)
 class _Call:
     """One activation of a declared service or topic behaviour."""
@@ -121,6 +170,7 @@ class _Call:
     done: bool = False
     number: int = 0  # the node's calls, from 1 (replay tells activations apart by it)
     request: int = 0  # the behaviour's service requests, from 1 in the order sent
+    unmatched: float | None = None  # monotonic time its service was first seen unmatched
 
 
 class DeclaredCalls:
@@ -146,6 +196,7 @@ class DeclaredCalls:
         self._requests: dict[str, int] = {}
         # (behaviour, request) -> its server holds the request: the call counts as idle (replay)
         self.held: Callable[[str, int], bool] = lambda _behaviour, _request: False
+        self.on_sent: Callable[[], None] = lambda: None  # a request went out (`ServerWatch`)
         for name, item in sorted(self._resolved.items()):
             self._endpoints[name] = self._endpoint(name, item)
             default = item.binding.timeout_s
@@ -274,6 +325,28 @@ class DeclaredCalls:
         name = call.resolved.behaviour.name
         call.request = self._requests[name] = self._requests.get(name, 0) + 1
         call.future.add_done_callback(lambda future: self._on_response(call, future))
+        self.on_sent()
+
+    def watch(self, now: float, limit: float) -> bool:
+        """A `ServerWatch` round: a request on its way whose service has not been matched
+        for `limit` seconds ends `aborted` (a member error); True while any is still out."""
+        busy = False
+        for call in list(self._calls.values()):
+            if call.done or call.future is None or call.future.done():
+                continue
+            client = self._endpoints[call.resolved.behaviour.name]
+            call.unmatched = unmatched_since(call.unmatched, client.service_is_ready(), now)
+            if not lost(call.unmatched, now, limit):
+                busy = True
+                continue
+            text = (
+                f"behaviour {call.resolved.behaviour.name} in {call.node.id}: service "
+                f"{self._node.resolve_service_name(client.srv_name)!r} lost (not matched for {limit:g} s): aborted"
+            )
+            self._errors.append(text)
+            self._node.get_logger().error(text)
+            self._end(call, "aborted", {})  # in a timer callback: not inside the engine's step
+        return busy
 
     def _on_response(self, call: _Call, future: Future[Any]) -> None:
         lockstep.received(self._scheduler, "response")

@@ -10,6 +10,9 @@ field cannot hold ends the behaviour `aborted`, logged and kept as a member erro
 is sent. A server that does not answer a sent goal within `goal_answer_timeout_s` (a node
 parameter, default 10 s) gives `aborted`; a declared action with `behaviours.<key>.timeout_s`
 > 0 is cancelled and gives `aborted` when it has not ended that long after the state's entry.
+A sent goal whose action server is no longer matched for `server_lost_s` (a node parameter,
+default 2 s, wall seconds: `declared.ServerWatch`) ends `aborted` with a member error, without a
+cancel request (nobody would answer it); a result that still comes is ignored.
 Feedback of declared actions becomes `FeedbackRecord`s for traces (`on_feedback`), at most one
 per goal every `FEEDBACK_INTERVAL_S` (later ones coalesced: the latest values, with a count).
 """
@@ -42,7 +45,14 @@ from .bindings import (
     resolve,
 )
 from .convert import ConversionError, build, plain
-from .declared import DeclaredCalls, FeedbackGate, FeedbackRecord
+from .declared import (
+    DeclaredCalls,
+    FeedbackGate,
+    FeedbackRecord,
+    ServerWatch,
+    lost,
+    unmatched_since,
+)
 from .messages import Interfaces, decode, to_ros
 from .scheduler import Handle, Scheduler
 from .spec import BehaviourSpec
@@ -77,6 +87,8 @@ class _Run:
     deadline: Handle | None = None  # `timeout_s` of a declared action
     answer_deadline: Handle | None = None  # `goal_answer_timeout_s` of a sent goal
     feedback: FeedbackGate | None = None  # declared actions: their coalesced feedback
+    sent: bool = False  # the goal went out (its server is watched from then on)
+    unmatched: float | None = None  # monotonic time its server was first seen unmatched
 
 
 class GoalClient(Node):
@@ -128,6 +140,8 @@ class GoalClient(Node):
         self.declared_calls = DeclaredCalls(
             self, self.scheduler, others, self._finish_declared, self.errors
         )
+        self.server_watch = ServerWatch(self, self._watch_servers)
+        self.declared_calls.on_sent = self.server_watch.wake
 
     def _hook_tracer(self) -> None:
         """A tracer (`MemberOptions.tracer`) with a `feedback(member, record)` method (the bag
@@ -309,6 +323,40 @@ class GoalClient(Node):
                 self.answer_timeout, lambda: self._no_answer(run)
             )
         future.add_done_callback(lambda f: self._on_goal_response(run, f))
+        run.sent = True
+        self.server_watch.wake()
+
+    def _watch_servers(self, now: float, limit: float) -> bool:
+        """A `ServerWatch` round over the sent goals and the service calls; True while any
+        is still on its way."""
+        busy = False
+        for run in list(self._runs.values()):
+            if not run.sent or run.finished or run.cancelled:
+                continue
+            ready = self.action_clients[run.behaviour.name].server_is_ready()
+            run.unmatched = unmatched_since(run.unmatched, ready, now)
+            if not lost(run.unmatched, now, limit):
+                busy = True
+            else:
+                self._server_lost(run, limit)
+        return self.declared_calls.watch(now, limit) or busy
+
+    def _server_lost(self, run: _Run, limit: float) -> None:
+        """The goal's server is gone: `aborted` and a member error, as a server-side abort."""
+        item = self._declared.get(run.behaviour.name)
+        ros_name = item.binding.ros_name if item is not None else run.behaviour.ros_name
+        name = self.resolve_service_name(ros_name)  # actions expand as services do
+        text = (
+            f"behaviour {run.behaviour.name} in {run.node.id}: action server {name!r} lost "
+            f"(not matched for {limit:g} s): aborted"
+        )
+        self.errors.append(text)
+        self.get_logger().error(text)
+        if not run.answered:  # a late answer is ignored (an accepted goal is cancelled then)
+            run.answered = True
+            self.pending_requests -= 1
+        run.cancelled = run.finished = True  # a server that comes back does not resume it
+        self._outcome(run, "aborted", {})
 
     def _on_feedback(self, run: _Run, feedback: Any) -> None:
         if run.behaviour.name not in self._declared:
