@@ -17,9 +17,9 @@ from .auction import Auctioneer, AuctionOpen, AuctionResult, Bid, Bidder, member
 from .controllers import ABORTED, PREEMPTED, SUCCEEDED, Base, Land, MoveTo, TakeOff
 from .coverage import LocalCoverage, RandomDirection
 from .geometry import ZERO, Command, Pose, positive
+from .members import QOS, Activity, MemberNode
 from .rng import Stream, member_key
 from .ros_fields import read_number, read_xy, write_fields
-from .servers import QOS, Activity, MemberNode
 from .servers_config import BehaviourConfig, ConfigError, ServersConfig, import_type
 from .tracking import TARGET_FOUND, TARGET_LOST, TargetEvent, TargetMonitoring, Tracking
 
