@@ -81,8 +81,9 @@ class Planner:
         own = (interfaces_package(model), nodes_package(model))
         views = private_views(model, tuple(charts), declared_bindings(model, names, index, own))
         modules = member_modules(charts)
+        query = ModelIndex(model)  # built once: every member type reads its hardware from it
         self.kinds = {
-            c.member or "": _member_kind(model, c, modules[c.name], views, scenario, params)
+            c.member or "": _member_kind(query, c, modules[c.name], views, scenario, params)
             for c in members
         }
 
@@ -170,7 +171,7 @@ class Planner:
 
 
 def _member_kind(
-    model: Model,
+    index: ModelIndex,
     chart: Chart,
     module: str,
     views: dict[str, BehaviourView],
@@ -180,8 +181,9 @@ def _member_kind(
     """How a member type runs at the detailed level (the module docstring's rules)."""
     member_type = chart.member or chart.name
     given = params.members.get(member_type, MemberParams())
+    model = index.model
     member = next(m for m in model.member_types if m.name == member_type)
-    hardware = ModelIndex(model).hardware_parameters(member)
+    hardware = index.hardware_parameters(member)
     data = {p.name: p.default for p in member.data}
     speed = (
         given.max_speed

@@ -26,6 +26,7 @@ from typing import Any
 
 from swarmgen import pipeline
 from swarmgen import ros_harness as harness
+from swarmgen.backends.rclpy_backend import nodes_package
 from swarmgen.sim.batch import Config
 from swarmgen.sim.detailed.bags import record_run
 from swarmgen.sim.detailed.domains import lease
@@ -68,8 +69,6 @@ def prepare(model_path: Path, root: Path) -> tuple[Workspace, Any]:
         raise SimulationError(f"{model_path}: does not compile (run `swarmgen validate`)")
     pipeline.write_tree(result.files, root / "ws")
     prefix = harness.build_interfaces(root / "ws" / "rclpy", model)
-    from swarmgen.backends.rclpy_backend import nodes_package
-
     nodes = root / "ws" / "rclpy" / nodes_package(model)
     return Workspace(nodes, prefix, root), result.validation
 
