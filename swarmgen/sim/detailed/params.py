@@ -3,6 +3,7 @@
     "detailed": {
       "patch_m": 0.4, "tick_s": 0.5,            one abstract patch and tick in metres, seconds
       "dt": 0.1, "cell_m": 0.4,                 the world's step and coverage cell
+      "frame_s": 0.1,                           the cameras' frame period (at most; dt/n)
       "members": {"UAV": {"max_speed": 0.8, "fov_radius": 0.5, "kind": "uav"}},
       "time_limit_s": 3600, "wall_limit_s": 900, "settle_s": 0.05,
       "library": {"auction_window": 1.0}        the behaviour servers' parameters
@@ -27,7 +28,7 @@ from swarmgen.sim.scenario import Scenario, ScenarioError
 KINDS = ("uav", "ugv")
 MEMBER_KEYS = {"max_speed", "fov_radius", "kind"}
 KEYS = {
-    "patch_m", "tick_s", "dt", "cell_m", "members", "time_limit_s", "wall_limit_s",
+    "patch_m", "tick_s", "dt", "frame_s", "cell_m", "members", "time_limit_s", "wall_limit_s",
     "settle_s", "library",
 }  # fmt: skip
 MAX_SECONDS = 10 * 24 * 3600.0
@@ -49,6 +50,7 @@ class DetailedParams:
     patch_m: float = 66.0 / 201  # the shipped scenarios' 201 patches are the paper's 66 m
     tick_s: float = 0.5  # the paper's abstract tick
     dt: float = 0.1
+    frame_s: float = 0.1  # the cameras look at least this often (world sub-steps)
     cell_m: float | None = None  # None: one patch
     members: dict[str, MemberParams] = field(default_factory=dict)
     time_limit_s: float | None = None  # None: the scenario's max_ticks, converted
@@ -63,6 +65,12 @@ class DetailedParams:
     def metres(self, patch: float) -> float:
         """A patch coordinate (patch centres at integers) as metres from the area's corner."""
         return (patch + 0.5) * self.patch_m
+
+    @property
+    def substeps(self) -> int:
+        """Camera frames per world step: the fewest that keep the frame period <= `frame_s`
+        (the step is the control period; a camera sees between two commands too)."""
+        return max(1, math.ceil(self.dt / self.frame_s - 1e-9))
 
     @property
     def cell(self) -> float:
@@ -93,6 +101,7 @@ def _params(raw: dict[str, Any]) -> DetailedParams:
         patch_m=_positive(raw, "patch_m", 66.0 / 201),
         tick_s=_positive(raw, "tick_s", 0.5),
         dt=_positive(raw, "dt", 0.1),
+        frame_s=_positive(raw, "frame_s", 0.1),
         cell_m=None if raw.get("cell_m") is None else _positive(raw, "cell_m", 1.0),
         members={kind: _member(kind, value) for kind, value in members.items()},
         time_limit_s=None if limit is None else _positive(raw, "time_limit_s", 1.0),

@@ -95,7 +95,8 @@ class Planner:
         world = {
             "area": {"width": scenario.width * params.patch_m,
                      "height": scenario.height * params.patch_m},
-            "cell": params.cell, "dt": params.dt, "seed": key, "robots": robots,
+            "cell": params.cell, "dt": params.dt, "substeps": params.substeps,
+            "seed": key, "robots": robots,
             "targets": [
                 {"id": n + 1, "x": params.metres(x), "y": params.metres(y)}
                 for n, (x, y) in enumerate(targets)

@@ -5,14 +5,20 @@ Rules (docs/detailed.md, "The world"):
   its held velocity command times `dt` (explicit Euler, exact for constant velocities), then
   **clamps** it into the area (a body pushing into a wall slides along it) and keeps z >= 0.
   UGVs stay at z = 0.
+- **Sub-steps.** Within a step the commands are constant, so the motion is known exactly at every
+  instant; with `substeps` n > 1 the camera also looks at the n instants (k + s/n) * dt, s = 1..n
+  (positions `x0 + v * (s/n) dt`, clamped; the last one is the step's own, `x0 + v * dt`, bit for
+  bit). Commands, poses and the published camera stay per step: the step is the control period,
+  the sub-step the camera's frame period (docs/detailed.md, "Sub-steps").
 - A command is clipped to the robot's `max_speed`: the horizontal norm (direction kept), and the
   vertical part to +-max_speed. It is held until the next command.
 - A camera sees the closed disc of radius `fov_radius` around the body's (x, y); a UAV's only
   while it is airborne (z >= `airborne_z`; 0, the default, means always), a UGV's always.
   Coverage: the area is divided into square cells of side `cell`; a cell is covered
-  at the first step at which its centre lies in the disc of a UAV's camera (step 0 included,
-  the start). A detection: a target that is in a camera's disc after a step and was not after
-  the previous one (per robot); the world keeps each target's first detection time.
+  at the first frame (sub-step) at which its centre lies in the disc of a UAV's camera (step 0
+  included, the start). A detection: a target that is in a camera's disc at a frame and was not
+  at the previous frame (per robot); the world keeps each target's first detection time. What a
+  camera reports for a step is every target it saw at any frame of that step.
 - Time is `steps * dt` (never accumulated). Robots are stepped in the order given, with plain
   float arithmetic: the same spec and commands give the same trajectory, bit for bit.
 """
@@ -73,12 +79,15 @@ class WorldSpec:
     cell: float = 1.0
     dt: float = 0.1
     airborne_z: float = 0.0  # a UAV's camera sees only at z >= this (a UAV on the ground: blind)
+    substeps: int = 1  # camera frames per step (see the module docstring)
 
     def __post_init__(self) -> None:
         """Refuse duplicate names or ids, starts and targets outside the area, and a cell size
         that does not divide the area into whole cells."""
         positive("dt", self.dt)
         positive("cell", self.cell)
+        if not isinstance(self.substeps, int) or self.substeps < 1:
+            raise ValueError(f"substeps must be a whole number >= 1, got {self.substeps!r}")
         if finite("airborne_z", self.airborne_z) < 0:
             raise ValueError(f"airborne_z must be >= 0, got {self.airborne_z}")
         names = [r.name for r in self.robots]
@@ -122,7 +131,7 @@ class Detection:
 class _Body:
     """The mutable state of one robot (slots: the step loop reads these millions of times)."""
 
-    __slots__ = ("camera", "cmd", "in_view", "min_z", "radius", "spec", "x", "y", "z")
+    __slots__ = ("camera", "cmd", "in_view", "min_z", "radius", "seen", "spec", "x", "y", "z")
 
     def __init__(self, spec: RobotSpec, airborne_z: float) -> None:
         self.spec = spec
@@ -130,7 +139,8 @@ class _Body:
         self.cmd = Command()
         self.camera = spec.fov_radius is not None
         self.radius = spec.fov_radius or 0.0
-        self.in_view = NONE
+        self.in_view = NONE  # in view at the last frame
+        self.seen = NONE  # seen at any frame of the last step (what its camera reports)
         # the lowest z its camera sees from: a UGV's camera is always on (it stays at z = 0)
         self.min_z = airborne_z if spec.kind == "uav" else 0.0
 
@@ -152,7 +162,9 @@ class World:
         self.nx, self.ny = spec.cells_across()
         self._bodies = {r.name: _Body(r, spec.airborne_z) for r in spec.robots}
         self._order = [self._bodies[r.name] for r in spec.robots]
-        self._cell_step = [-1] * (self.nx * self.ny)  # first step a cell was covered
+        self.substeps = spec.substeps
+        self._frame = 0  # frames since the start: steps * substeps at step boundaries
+        self._cell_frame = [-1] * (self.nx * self.ny)  # first frame a cell was covered
         self.covered_cells = 0
         self._targets = {t.id: t for t in spec.targets}
         self._buckets: dict[int, list[TargetSpec]] = {}
@@ -161,8 +173,8 @@ class World:
         self._first_seen: dict[int, float] = {}
         for body in self._order:
             self._cover(body)
-            body.in_view = self._seen_by(body)
-            self._note_seen(body.in_view)
+            body.in_view = body.seen = self._seen_by(body)
+            self._note_seen(body.in_view, 0.0)
 
     # --- queries
 
@@ -181,16 +193,16 @@ class World:
         return self._body(robot).cmd
 
     def visible(self, robot: str) -> tuple[TargetSpec, ...]:
-        """The targets in a robot's camera view now, by id."""
-        return tuple(self._targets[i] for i in sorted(self._body(robot).in_view))
+        """The targets a robot's camera saw during the last step (at any frame), by id."""
+        return tuple(self._targets[i] for i in sorted(self._body(robot).seen))
 
     def coverage(self) -> float:
         """The share of cells covered so far."""
-        return self.covered_cells / len(self._cell_step)
+        return self.covered_cells / len(self._cell_frame)
 
     def cell_times(self) -> list[float | None]:
         """When each cell was first covered (None: never), row by row from the south-west."""
-        return [None if s < 0 else s * self.dt for s in self._cell_step]
+        return [None if f < 0 else self._frame_time(f) for f in self._cell_frame]
 
     def first_detections(self) -> dict[int, float]:
         """Each detected target's first detection time."""
@@ -211,22 +223,38 @@ class World:
         body = self._body(robot)
         body.camera = on and body.spec.fov_radius is not None
         if not body.camera:
-            body.in_view = NONE
+            body.in_view = body.seen = NONE
 
     def step(self) -> tuple[Detection, ...]:
-        """Advance by dt: move and clamp every body, record coverage; the new detections."""
-        dt, width, height = self.dt, self.area.width, self.area.height
+        """Advance by dt: move and clamp every body, look at every frame, record coverage; the
+        new detections, in frame order, then robot order."""
+        n, dt = self.substeps, self.dt
+        starts = [(body, body.x, body.y, body.z) for body in self._order]
         for body in self._order:
-            cmd = body.cmd
-            x = body.x + cmd.vx * dt
-            y = body.y + cmd.vy * dt
-            body.x = 0.0 if x < 0.0 else width if x > width else x
-            body.y = 0.0 if y < 0.0 else height if y > height else y
-            z = body.z + cmd.vz * dt
-            body.z = z if z > 0.0 else 0.0
-        self.steps += 1
-        t = self.time
+            body.seen = NONE
         found: list[Detection] = []
+        for s in range(1, n + 1):
+            tau = dt if s == n else dt * s / n  # the last frame is the step's own pose, exactly
+            for body, x0, y0, z0 in starts:
+                self._place(body, x0, y0, z0, tau)
+            self._frame += 1
+            self._look(found)
+        self.steps += 1
+        return tuple(found)
+
+    def _place(self, body: _Body, x0: float, y0: float, z0: float, tau: float) -> None:
+        """A body where its held command takes it `tau` seconds after (x0, y0, z0), clamped."""
+        cmd, width, height = body.cmd, self.area.width, self.area.height
+        x = x0 + cmd.vx * tau
+        y = y0 + cmd.vy * tau
+        body.x = 0.0 if x < 0.0 else width if x > width else x
+        body.y = 0.0 if y < 0.0 else height if y > height else y
+        z = z0 + cmd.vz * tau
+        body.z = z if z > 0.0 else 0.0
+
+    def _look(self, found: list[Detection]) -> None:
+        """One camera frame of every body: coverage, then the targets that came into view."""
+        t = self._frame_time(self._frame)
         for body in self._order:
             if not body.looking:
                 body.in_view = NONE  # seen again once it looks: a new detection then
@@ -237,8 +265,14 @@ class World:
                 target = self._targets[target_id]
                 found.append(Detection(body.spec.name, target_id, target.x, target.y, t))
             body.in_view = now
-            self._note_seen(now)
-        return tuple(found)
+            if now:
+                body.seen = body.seen | now
+                self._note_seen(now, t)
+
+    def _frame_time(self, frame: int) -> float:
+        """A frame's time: a step boundary's is k * dt, exactly as `time`."""
+        steps, within = divmod(frame, self.substeps)
+        return steps * self.dt if within == 0 else frame * self.dt / self.substeps
 
     # --- internals
 
@@ -266,7 +300,7 @@ class World:
         if not body.looking or body.spec.kind != "uav":
             return
         c, r2 = self.spec.cell, body.radius * body.radius
-        x, y, nx, cells = body.x, body.y, self.nx, self._cell_step
+        x, y, nx, cells = body.x, body.y, self.nx, self._cell_frame
         for j in self._span(y, body.radius, self.ny):
             dy = (j + 0.5) * c - y
             row = j * nx
@@ -274,7 +308,7 @@ class World:
                 if cells[row + i] < 0:
                     dx = (i + 0.5) * c - x
                     if dx * dx + dy * dy <= r2:
-                        cells[row + i] = self.steps
+                        cells[row + i] = self._frame
                         self.covered_cells += 1
 
     def _seen_by(self, body: _Body) -> frozenset[int]:
@@ -294,6 +328,6 @@ class World:
                         seen.append(target.id)
         return frozenset(seen) if seen else NONE
 
-    def _note_seen(self, ids: frozenset[int]) -> None:
+    def _note_seen(self, ids: frozenset[int], t: float) -> None:
         for target_id in ids:
-            self._first_seen.setdefault(target_id, self.time)
+            self._first_seen.setdefault(target_id, t)

@@ -113,6 +113,7 @@ def parse(raw: Any, base: Path = Path(".")) -> WorldFile:
             cell=top.number("cell", 1.0, positive=True),
             dt=dt,
             airborne_z=top.number("airborne_z", AIRBORNE_Z, low=0.0),
+            substeps=top.integer("substeps", 1, low=1),
         )
     except ValueError as err:  # the core names the robot, target or field
         raise WorldFileError(str(err)) from None

@@ -167,6 +167,7 @@ class Run:
             "reason": reason,
             "seed": self.config.seed,
             "dt": self.config.spec.dt,
+            "substeps": self.config.spec.substeps,
             "steps": self.k,
             "sim_s": sim_s,
             "coverage": self.world.coverage(),
