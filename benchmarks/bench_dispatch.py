@@ -1,23 +1,34 @@
 """Event dispatch: the generated asyncio code (its vendored engine) vs sismic vs Qt SCXML, on
-the SAR UAV machine and the same event trace, side by side in one run.
+the SAR UAV machine and the same event trace, side by side in one run; and the engine on a
+synthetic chart of `--synth-states` states (benchmarks/synth_model.py) against a small one of
+the same shape, on seeded walks: the per-event cost must not grow with the chart.
 
-    .venv/bin/python benchmarks/bench_dispatch.py [--events 30000]
+    .venv/bin/python benchmarks/bench_dispatch.py [--events 30000] [--reps 5] [--synth-states N]
 
-Needs `sismic` (pip install -e '.[bench]') and Qt SCXML (make sysdeps). Writes
-benchmarks/results/dispatch.json.
+Each repetition runs every case once, in turn; the figures are the medians over repetitions
+(the machine is shared: read the ratios). What the harness holds before a timed loop (the
+compiler, the lowered charts, the events made beforehand) is frozen out of the garbage collector
+(`gc.freeze`) for every in-process case alike: else the collector's full passes over the
+compiler's heap, which a generated package's process does not have, are a third of the time. Needs `sismic` (pip install -e '.[bench]') and Qt
+SCXML (make sysdeps). Writes benchmarks/results/dispatch.json.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
+import gc
 import importlib
 import json
 import os
+import random
+import statistics
 import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +38,8 @@ sys.path.insert(0, str(ROOT))
 from swarmgen import pipeline  # noqa: E402
 from swarmgen.chart import model as c  # noqa: E402
 from swarmgen.chart.lower import lower  # noqa: E402
+from swarmgen.runtime.chart import FINALIZE_PREFIX, Chart  # noqa: E402
+from swarmgen.runtime.engine import Engine, NullHost  # noqa: E402
 
 MODEL = ROOT / "sample_models" / "sar" / "sar.xmi"
 # One mission loop of the UAV: the trace repeats it (after launch and take-off).
@@ -39,6 +52,17 @@ LOOP = [
     "outcome.Tracking.succeeded",
     "unrelatedEvent",  # events nobody reacts to are part of real traffic
 ]
+
+
+@contextlib.contextmanager
+def settled_heap() -> Iterator[None]:
+    """The timed loop's collector sees only what the loop allocates (see the docstring)."""
+    gc.collect()
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
 
 
 def trace(count: int) -> list[str]:
@@ -70,10 +94,11 @@ def bench_swarmgen_engine(package: Any, events: list[str]) -> tuple[float, list[
     engine = engine_module.Engine(package.uav.build(), engine_module.NullHost())
     engine.start()
     made = [engine.make_event(name) for name in events]
-    started = time.perf_counter()
-    for event in made:
-        engine.send(event)
-    elapsed = time.perf_counter() - started
+    with settled_heap():
+        started = time.perf_counter()
+        for event in made:
+            engine.send(event)
+        elapsed = time.perf_counter() - started
     return elapsed, engine.active()
 
 
@@ -94,12 +119,13 @@ def bench_swarmgen_member(package: Any, events: list[str]) -> float:
         member = member_module.Member(package.uav.build(), "UAV", "1", library, _Bus())
         runner = asyncio.create_task(member.run())
         await asyncio.sleep(0)
-        started = time.perf_counter()
-        for name in events:
-            member.deliver(member.engine.make_event(name))
-        while not member.queue.empty():
-            await asyncio.sleep(0)
-        elapsed = time.perf_counter() - started
+        with settled_heap():
+            started = time.perf_counter()
+            for name in events:
+                member.deliver(member.engine.make_event(name))
+            while not member.queue.empty():
+                await asyncio.sleep(0)
+            elapsed = time.perf_counter() - started
         member.stop()
         await runner
         return elapsed
@@ -159,11 +185,12 @@ def bench_sismic(chart: c.Chart, events: list[str]) -> tuple[float, list[str]]:
 
     interpreter = Interpreter(import_from_yaml(text=sismic_yaml(chart)))
     interpreter.execute()
-    started = time.perf_counter()
-    for name in events:
-        interpreter.queue(name)
-        interpreter.execute()
-    elapsed = time.perf_counter() - started
+    with settled_heap():
+        started = time.perf_counter()
+        for name in events:
+            interpreter.queue(name)
+            interpreter.execute()
+        elapsed = time.perf_counter() - started
     return elapsed, sorted(s for s in interpreter.configuration if s != "root")
 
 
@@ -207,9 +234,135 @@ def bench_qt(tmp: Path, events: list[str]) -> tuple[float, list[str]]:
     return payload["elapsed"], payload["active"]
 
 
+# --- a synthetic chart of N states ---------------------------------------------------------------
+
+
+def synth_chart(tmp: Path, states: int) -> Callable[[], Chart]:
+    """The `build()` of the synthetic model's Scout chart, as the asyncio backend renders it
+    (on `swarmgen.runtime`; not formatted with black, which only changes the layout)."""
+    from swarmgen.backends.pycommon import member_view
+    from swarmgen.backends.pyrender import ChartRenderer
+    from swarmgen.render import render
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    import synth_model
+
+    xmi = tmp / f"synth{states}.xmi"
+    xmi.write_text(synth_model.generate(states), encoding="utf-8")
+    chart = next(ch for ch in pipeline.validate(xmi).charts if ch.member == "Scout")
+    common = {"version": "bench", "source": xmi.name, "runtime": "swarmgen.runtime"}
+    code = render(
+        "asyncio/member.py.j2", **member_view(chart, common, ChartRenderer(chart).render())
+    )
+    namespace: dict[str, Any] = {"__name__": f"bench_synth_{states}"}
+    exec(compile(code, f"<synthetic {states}>", "exec"), namespace)
+    build: Callable[[], Chart] = namespace["build"]
+    return build
+
+
+Step = tuple[str, dict[str, Any] | None]  # an event of a walk: name, data
+
+
+def walk(build: Callable[[], Chart], count: int, seed: int = 1) -> list[Step]:
+    """A seeded walk: each event one that some transition of the configuration waits for (a
+    behaviour's end as `done.invoke.<state>.<outcome>`), with data that lets the synthetic
+    model's guards pass as often as not (so the walk moves through its groups), every sixth
+    one nobody handles; an event that ends the machine is left out from then on (the walk
+    replays to go on)."""
+    rng = random.Random(seed)
+    events: list[Step] = []
+    banned: set[str] = set()
+    engine = Engine(build(), NullHost())
+    engine.start()
+    while len(events) < count:
+        if len(events) % 6 == 5:
+            step: Step = ("unrelatedEvent", None)
+        else:
+            names = sorted(set(_waited(engine)) - banned)
+            if not names:
+                raise RuntimeError(f"the walk is stuck in {engine.active()}")
+            name = rng.choice(names)
+            step = (name, _walk_data(engine, name, rng))
+        engine.send(engine.make_event(*step))
+        if not engine.running:
+            banned.add(step[0])
+            engine = Engine(build(), NullHost())
+            engine.start()
+            for earlier in events:
+                engine.send(engine.make_event(*earlier))
+            continue
+        events.append(step)
+    return events
+
+
+def _walk_data(engine: Engine, name: str, rng: random.Random) -> dict[str, Any] | None:
+    """Fields for the synthetic model's guarded events (benchmarks/synth_model.py)."""
+    if name == "advance":  # `event.step == j` leaves group j
+        groups = [n for n in engine.active() if n.count("_") == 1 and "_G" in n]
+        return {"step": int(groups[0].split("_G")[1]) if groups else 1}
+    if name == "targetFound":
+        return {"target_id": rng.choice([0, 1])}
+    if name == "alarm":
+        return {"level": rng.choice([1, 3])}
+    return None
+
+
+def _waited(engine: Engine) -> list[str]:
+    found = []
+    for node in engine.config:
+        for transition in node.transitions:
+            for descriptor in transition.events:
+                if "*" in descriptor:
+                    continue
+                if descriptor.startswith(FINALIZE_PREFIX) and node.call is not None:
+                    found.extend(f"{descriptor}.{o}" for o in node.call.outcomes)
+                else:
+                    found.append(descriptor)
+    return found
+
+
+def explored(build: Callable[[], Chart], events: list[Step]) -> int:
+    """How many states the walk makes active at some point."""
+    engine = Engine(build(), NullHost())
+    engine.start()
+    seen = set(engine.active())
+    for step in events:
+        engine.send(engine.make_event(*step))
+        seen.update(engine.active())
+    return len(seen)
+
+
+def bench_engine(build: Callable[[], Chart], events: list[Step]) -> float:
+    """The engine alone: synchronous dispatch, no behaviours run (events made beforehand)."""
+    engine = Engine(build(), NullHost())
+    engine.start()
+    made = [engine.make_event(*step) for step in events]
+    with settled_heap():
+        started = time.perf_counter()
+        for event in made:
+            engine.send(event)
+        return time.perf_counter() - started
+
+
+# --- the run --------------------------------------------------------------------------------------
+
+
+def repeated(cases: dict[str, Callable[[], float]], reps: int) -> dict[str, list[float]]:
+    """Every case once per repetition, in turn, so that all see the same load."""
+    seconds: dict[str, list[float]] = {name: [] for name in cases}
+    for _ in range(reps):
+        for name, case in cases.items():
+            seconds[name].append(case())
+    return seconds
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--events", type=int, default=30_000)
+    parser.add_argument("--reps", type=int, default=5)
+    parser.add_argument("--synth-states", type=int, default=10_000, help="0: leave it out")
+    parser.add_argument("--synth-small", type=int, default=100)
+    parser.add_argument("--output", type=Path, default=ROOT / "benchmarks" / "results")
     args = parser.parse_args()
     events = trace(args.events)
     chart = uav_chart()
@@ -217,29 +370,57 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         package = generated_module(tmp)
-        elapsed, ours_active = bench_swarmgen_engine(package, events)
-        rows["swarmgen engine (generated asyncio package)"] = {"seconds": elapsed}
-        rows["swarmgen asyncio member (queue + tasks)"] = {
-            "seconds": bench_swarmgen_member(package, events)
+        _, ours_active = bench_swarmgen_engine(package, events)
+        _, sismic_active = bench_sismic(chart, events)
+        _, qt_active = bench_qt(tmp, events)
+        cases: dict[str, Callable[[], float]] = {
+            "swarmgen engine (generated asyncio package)": lambda: bench_swarmgen_engine(
+                package, events
+            )[0],
+            "swarmgen asyncio member (queue + tasks)": lambda: bench_swarmgen_member(
+                package, events
+            ),
+            "sismic 1.6": lambda: bench_sismic(chart, events)[0],
+            "Qt SCXML 5.15 (PySide2)": lambda: bench_qt(tmp, events)[0],
         }
-        elapsed, sismic_active = bench_sismic(chart, events)
-        rows["sismic 1.6"] = {"seconds": elapsed}
-        elapsed, qt_active = bench_qt(tmp, events)
-        rows["Qt SCXML 5.15 (PySide2)"] = {"seconds": elapsed}
-    for row in rows.values():
-        row["events_per_second"] = round(len(events) / row["seconds"])
+        walks: dict[str, tuple[int, int]] = {}
+        for states in (args.synth_small, args.synth_states):
+            if states:
+                synth = synth_chart(tmp, states)
+                synth_events = walk(synth, args.events)
+                name = f"swarmgen engine, synthetic {states}-state chart (walk)"
+                walks[name] = (states, explored(synth, synth_events))
+                # a chart built afresh each time (its dispatch tables start empty), as the UAV's
+                cases[name] = lambda synth=synth, ev=synth_events: bench_engine(synth, ev)
+        seconds = repeated(cases, args.reps)
+    for name, values in seconds.items():
+        median = statistics.median(values)
+        rows[name] = {
+            "seconds": median,
+            "events_per_second": round(len(events) / median),
+            "seconds_each": [round(v, 4) for v in values],
+        }
     reference = rows["sismic 1.6"]["events_per_second"]
-    for row in rows.values():
+    uav = rows["swarmgen engine (generated asyncio package)"]["events_per_second"]
+    for name, row in rows.items():
         row["x_sismic"] = round(row["events_per_second"] / reference, 1)
+        if name in walks:
+            row["states"], row["states_the_walk_visits"] = walks[name]
+            row["of_uav_rate"] = round(row["events_per_second"] / uav, 2)
     agree = ours_active == sismic_active == [s for s in qt_active]
     print(f"{len(events)} events on the SAR UAV machine; final configurations agree: {agree}")
-    print(f"{'implementation':48} {'events/s':>10} {'x sismic':>9}")
+    print(f"medians of {args.reps} repetitions")
+    print(f"{'implementation':56} {'events/s':>10} {'x sismic':>9}")
     for name, row in rows.items():
-        print(f"{name:48} {row['events_per_second']:>10} {row['x_sismic']:>9}")
-    out = ROOT / "benchmarks" / "results"
-    out.mkdir(parents=True, exist_ok=True)
-    payload = {"events": len(events), "configurations_agree": agree, "results": rows}
-    (out / "dispatch.json").write_text(json.dumps(payload, indent=2) + "\n")
+        print(f"{name:56} {row['events_per_second']:>10} {row['x_sismic']:>9}")
+    args.output.mkdir(parents=True, exist_ok=True)
+    payload = {
+        "events": len(events),
+        "repetitions": args.reps,
+        "configurations_agree": agree,
+        "results": rows,
+    }
+    (args.output / "dispatch.json").write_text(json.dumps(payload, indent=2) + "\n")
 
 
 if __name__ == "__main__":

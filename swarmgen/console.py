@@ -20,7 +20,6 @@ import errno
 import io
 import os
 import sys
-import tempfile
 import unicodedata
 from pathlib import Path
 
@@ -217,6 +216,8 @@ def check_file(path: Path, option: str) -> list[Path]:
         raise OutputPathError(f"{option}: {problem}")
     if path.is_dir():
         raise OutputPathError(f"{option} {shown(path)}: is a directory; give a file name")
+    import tempfile  # here, not at the top: every command's start-up imports this module
+
     made = _creatable(path.absolute().parent, option)
     try:
         with tempfile.NamedTemporaryFile(dir=path.absolute().parent, prefix=".swarmgen-"):
@@ -230,6 +231,8 @@ def check_file(path: Path, option: str) -> list[Path]:
 def write_file(path: Path, data: bytes, option: str) -> None:
     """Write `data` to `path` atomically (a temporary file renamed over it): a reader never
     sees half a file, and a failure leaves the old one."""
+    import tempfile  # as in check_file
+
     temporary: str | None = None
     try:
         descriptor, temporary = tempfile.mkstemp(dir=path.absolute().parent, prefix=".swarmgen-")

@@ -12,8 +12,9 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
+from typing import TYPE_CHECKING
 
-from swarmgen import __version__, check, graph, outtree
+from swarmgen import __version__, check, outtree
 from swarmgen import diagnostics as dg
 from swarmgen.backends import SCXML, ScxmlOutput, registry, selection
 from swarmgen.chart import checks as chart_checks
@@ -24,9 +25,13 @@ from swarmgen.frontend import load
 from swarmgen.generated import header, markdown_cell
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
-from swarmgen.render import render, templates_from
 from swarmgen.ros.idl_index import InterfaceIndex, default_roots
-from swarmgen.scxml.emit import ScxmlDocument
+
+if TYPE_CHECKING:
+    from swarmgen.scxml.emit import ScxmlDocument
+
+# What only compile and graph use (Jinja2 and the templates, the diagrams) is imported in their
+# functions: `validate` loads the stages it runs and no more (docs/performance.md).
 
 MANIFEST = outtree.MANIFEST
 OutputError = outtree.OutputError
@@ -110,6 +115,8 @@ def compile_model(
     """Validate (declared ROS types against `interfaces` too, as `validate`), then render every
     output of the registry (all, or SCXML and those named), with the templates of `templates`
     before the shipped ones (`swarmgen.render`)."""
+    from swarmgen.render import templates_from
+
     with _few_collections(), templates_from(templates):
         return _compile(path, backends, interfaces)
 
@@ -136,6 +143,8 @@ def graph_model(path: Path, fmt: str = "mermaid", member: str | None = None) -> 
     """Validate, then draw every machine and the swarm composition (`swarmgen.graph`) in `fmt`,
     with a manifest so that the next run may replace the directory. Raises graph.GraphError for
     an unknown member type or a missing Graphviz."""
+    from swarmgen import graph
+
     with _few_collections():
         validation = _validate(path)
         if validation.model is None or dg.has_errors(validation.diagnostics):
@@ -146,6 +155,8 @@ def graph_model(path: Path, fmt: str = "mermaid", member: str | None = None) -> 
 
 
 def _output_readme(model: Model, source: Path, documents: tuple[ScxmlDocument, ...]) -> str:
+    from swarmgen.render import render
+
     swarms = [
         {
             "name": markdown_cell(s.name),

@@ -13,10 +13,9 @@ from dataclasses import dataclass
 from pathlib import PurePosixPath
 from typing import TYPE_CHECKING, Protocol
 
-from swarmgen.chart.model import Chart
-from swarmgen.ir.nodes import Model
-
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # annotations only: `compile --help` must not import pydantic and the charts
+    from swarmgen.chart.model import Chart
+    from swarmgen.ir.nodes import Model
     from swarmgen.ros.idl_index import InterfaceIndex
     from swarmgen.scxml.emit import ScxmlDocument
 

@@ -7,16 +7,21 @@ import difflib
 import os
 import sys
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from functools import wraps
 from pathlib import Path
-from typing import Any, NoReturn, ParamSpec, TypeVar
+from typing import TYPE_CHECKING, Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
 from swarmgen import __version__, console
-from swarmgen import diagnostics as dg
 from swarmgen.errors import SwarmgenError
+
+if TYPE_CHECKING:
+    from swarmgen import diagnostics as dg
+
+# The diagnostics package (pydantic spans, every code) is imported inside the functions that use
+# it: defining the commands and showing their help must not pay for it (docs/performance.md).
 
 P = ParamSpec("P")
 R = TypeVar("R")
@@ -61,10 +66,13 @@ def report(err: SwarmgenError) -> NoReturn:
     fail(str(err), err.exit_code)
 
 
-def fail(message: str, code: int = dg.ExitCode.INPUT_ERROR) -> NoReturn:
-    """A user error: one line on stderr, exit `code` (2 unless the error says otherwise)."""
+def fail(message: str, code: int | None = None) -> NoReturn:
+    """A user error: one line on stderr, exit `code` (2, `ExitCode.INPUT_ERROR`, unless the
+    error says otherwise)."""
+    from swarmgen import diagnostics as dg
+
     click.echo(f"swarmgen: error: {dg.one_line(' '.join(message.splitlines()))}", err=True)
-    sys.exit(code)
+    sys.exit(dg.ExitCode.INPUT_ERROR if code is None else code)
 
 
 class PathType(click.Path):
@@ -86,7 +94,29 @@ PATH = PathType(path_type=Path)
 
 
 class OutputChoice(click.Choice[str]):
-    """One of the registry's outputs (`swarmgen.backends`); a wrong name gets the close ones."""
+    """One of the registry's outputs (`swarmgen.backends`); a wrong name gets the close ones.
+
+    The names come from `outputs`, called the first time they are needed (a value to check,
+    help to show), not when the command is defined: the registry imports the IR and the
+    charts, which a command's definition must not pay for."""
+
+    def __init__(self, outputs: Callable[[], Sequence[str]]) -> None:
+        """The choice of the names `outputs()` returns, asked for when first needed."""
+        super().__init__(())
+        self._outputs = outputs
+        self._names: tuple[str, ...] | None = None
+
+    @property
+    def choices(self) -> tuple[str, ...]:
+        """The registry's names, in its order."""
+        if self._names is None:
+            self._names = tuple(self._outputs())
+        return self._names
+
+    @choices.setter
+    def choices(self, value: Sequence[str]) -> None:
+        """click.Choice sets its choices on construction (to nothing, here: see `outputs`)."""
+        self._names = tuple(value) if value else None
 
     def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> str:
         """The name itself, or a usage error naming the choices and the closest of them."""
@@ -99,8 +129,39 @@ class OutputChoice(click.Choice[str]):
             self.fail(f"unknown backend '{value}'; choose from {choices}{also}", param, ctx)
 
 
+class DeferredHelpOption(click.Option):
+    """An option whose help text is made when help is shown, by `help_text()`: it names the
+    registry's outputs, which are imported only then (see `OutputChoice`)."""
+
+    def __init__(self, *args: Any, help_text: Callable[[], str], **kwargs: Any) -> None:
+        """A click option (`click.option(..., cls=DeferredHelpOption, help_text=...)`)."""
+        super().__init__(*args, **kwargs)
+        self.help_text = help_text
+
+    def get_help_record(self, ctx: click.Context) -> tuple[str, str] | None:
+        """The help line, with the help text made now."""
+        self.help = self.help_text()
+        return super().get_help_record(ctx)
+
+
+def outputs(*leaving_out: str) -> list[str]:
+    """The registry's outputs but those left out (`swarmgen.backends.names`), imported now."""
+    from swarmgen.backends import names
+
+    return names(*leaving_out)
+
+
+def runnable_outputs() -> list[str]:
+    """The outputs `swarmgen replay` can run (`swarmgen.backends.runnable`), imported now."""
+    from swarmgen.backends import runnable
+
+    return runnable()
+
+
 def render_diagnostics(diagnostics: list[dg.Diagnostic], fmt: str) -> str:
     """The diagnostics as `--format` asks: text, JSON or SARIF."""
+    from swarmgen import diagnostics as dg
+
     if fmt == "json":
         return dg.render_json(diagnostics)
     if fmt == "sarif":
@@ -117,6 +178,8 @@ def emit_diagnostics(diagnostics: list[dg.Diagnostic], fmt: str, *, to_stdout: b
 
 def check_codes(codes: tuple[str, ...]) -> None:
     """Every --disable code is a known diagnostic code, or a usage error (exit 2)."""
+    from swarmgen import diagnostics as dg
+
     unknown = [c for c in codes if c.upper() not in dg.CODES]
     if unknown:
         raise click.BadParameter(f"unknown code(s) {', '.join(unknown)}", param_hint="--disable")

@@ -5,13 +5,11 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from swarmgen import console, pipeline
-from swarmgen import diagnostics as dg
-from swarmgen.backends import SCXML
-from swarmgen.backends import names as backend_names
+from swarmgen import console
 from swarmgen.commands.common import (
     DISABLE,
     FORMAT,
@@ -19,13 +17,31 @@ from swarmgen.commands.common import (
     MODEL,
     PATH,
     STRICT,
+    DeferredHelpOption,
     OutputChoice,
     PathType,
     check_codes,
     emit_diagnostics,
     fail,
     guarded,
+    outputs,
 )
+
+if TYPE_CHECKING:
+    from swarmgen import pipeline
+
+# The pipeline and the diagnostics are imported in the command functions: `swarmgen --help` and
+# `swarmgen compile --help` must not load the compiler (docs/performance.md).
+
+
+def _backend_help() -> str:
+    """The help of --backend: it names the registry's outputs, so it is made when shown."""
+    from swarmgen.backends import SCXML
+
+    return (
+        f"Only these outputs besides SCXML (repeatable: {', '.join(outputs(SCXML))}; "
+        "`scxml` alone: SCXML only). Default: all."
+    )
 
 
 @click.command(name="compile")
@@ -37,9 +53,9 @@ from swarmgen.commands.common import (
     "backends",
     multiple=True,
     metavar="NAME",
-    type=OutputChoice(backend_names()),
-    help=f"Only these outputs besides SCXML (repeatable: {', '.join(backend_names(SCXML))}; "
-    "`scxml` alone: SCXML only). Default: all.",
+    type=OutputChoice(outputs),
+    cls=DeferredHelpOption,
+    help_text=_backend_help,
 )
 @click.option(
     "--templates",
@@ -63,6 +79,9 @@ def compile_(
     disabled: tuple[str, ...],
 ) -> None:
     """Compile MODEL into OUTPUT (SCXML and every backend), replacing it atomically."""
+    from swarmgen import diagnostics as dg
+    from swarmgen import pipeline
+
     check_codes(disabled)
     result = pipeline.compile_model(
         model, backends=backends or None, templates=templates, interfaces=interfaces
@@ -96,6 +115,9 @@ def compile_(
 
 def _check_drift(model: Path, output: Path, files: pipeline.Files) -> None:
     """--check: a diff and exit 1 if OUTPUT differs from what MODEL compiles to; writes nothing."""
+    from swarmgen import diagnostics as dg
+    from swarmgen import pipeline
+
     difference = pipeline.diff_tree(files, output)
     if difference:
         click.echo(difference, nl=False)
@@ -121,6 +143,9 @@ def _check_drift(model: Path, output: Path, files: pipeline.Files) -> None:
 @guarded
 def schema(output: Path, check: bool) -> None:
     """Write the JSON Schema of swarmgen's IR."""
+    from swarmgen import diagnostics as dg
+    from swarmgen import pipeline
+
     target = output / "ir.schema.json"
     text = pipeline.ir_schema()
     if check:

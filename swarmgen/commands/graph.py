@@ -7,9 +7,11 @@ from pathlib import Path
 
 import click
 
-from swarmgen import console, pipeline
-from swarmgen import diagnostics as dg
+from swarmgen import console
 from swarmgen.commands.common import MODEL, PATH, emit_diagnostics, guarded
+
+# The pipeline and the diagnostics are imported in the command functions: `swarmgen --help` and
+# `swarmgen graph --help` must not load the compiler (docs/performance.md).
 
 
 @click.command(name="graph")
@@ -26,6 +28,9 @@ from swarmgen.commands.common import MODEL, PATH, emit_diagnostics, guarded
 @guarded
 def graph_(model: Path, member: str | None, diagram_format: str, output: Path | None) -> None:
     """Draw MODEL's state machines (one diagram each) and its swarm composition."""
+    from swarmgen import diagnostics as dg
+    from swarmgen import pipeline
+
     if diagram_format == "svg" and output is None:
         raise click.UsageError("--format svg writes files: give -o DIR")
     result = pipeline.graph_model(model, diagram_format, member)  # GraphError: common.report

@@ -9,7 +9,6 @@ from pathlib import Path
 import click
 
 from swarmgen import console
-from swarmgen.backends import runnable as runnable_outputs
 from swarmgen.commands.common import (
     MODEL,
     PATH,
@@ -17,6 +16,7 @@ from swarmgen.commands.common import (
     check_record,
     guarded,
     record_options,
+    runnable_outputs,
 )
 
 
@@ -25,7 +25,7 @@ from swarmgen.commands.common import (
 @click.option("--member", required=True, help="Member type to run.")
 @click.option("--script", "scenario", type=PATH, required=True, help="Scenario (JSON).")
 @click.option(
-    "--backend", type=OutputChoice(runnable_outputs()), default="asyncio", show_default=True,
+    "--backend", type=OutputChoice(runnable_outputs), default="asyncio", show_default=True,
     help="Where to run: the generated asyncio, smach or rclpy code, or the SCXML in Qt SCXML.",
 )  # fmt: skip
 @record_options("Also write the trace as a ROS 2 bag into this new directory (docs/trace.md).")

@@ -10,12 +10,14 @@ from typing import TYPE_CHECKING
 
 import click
 
-from swarmgen import console, pipeline
-from swarmgen import diagnostics as dg
+from swarmgen import console
 from swarmgen.commands.common import MODEL, PATH, check_record, guarded, record_options
 
 if TYPE_CHECKING:
     from swarmgen.sim.scenario import Scenario
+
+# The pipeline and the diagnostics are imported in the command functions: `swarmgen --help` and
+# `swarmgen simulate --help` must not load the compiler (docs/performance.md).
 
 
 @click.command()
@@ -73,6 +75,7 @@ def simulate(
 ) -> None:
     """Run MODEL's compiled behaviours in the paper's abstract world (or, with `--level
     detailed`, the generated ROS 2 swarm in the continuous world) and report the statistics."""
+    from swarmgen import diagnostics as dg
     from swarmgen.sim import run as sim_run
 
     check_record(record)
@@ -164,6 +167,8 @@ class _ProgressBar:
 def _check_sweep(model: Path, chosen: Scenario) -> None:
     """The sweep's limits and the member types of --members, before anything runs (a model
     with errors is reported by the simulation itself)."""
+    from swarmgen import diagnostics as dg
+    from swarmgen import pipeline
     from swarmgen.ir.query import composition
     from swarmgen.sim import scenario as sim_scenario
 

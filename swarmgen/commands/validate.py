@@ -6,11 +6,11 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import click
 
-from swarmgen import __version__, console, pipeline
-from swarmgen import diagnostics as dg
+from swarmgen import __version__, console
 from swarmgen.commands.common import (
     DISABLE,
     FORMAT,
@@ -21,7 +21,13 @@ from swarmgen.commands.common import (
     guarded,
 )
 
-Found = list[tuple[Path, list[dg.Diagnostic]]]
+if TYPE_CHECKING:
+    from swarmgen import diagnostics as dg
+
+# The pipeline and the diagnostics are imported in the command functions: `swarmgen --help` and
+# `swarmgen validate --help` must not load the compiler (docs/performance.md).
+
+Found = list[tuple[Path, list["dg.Diagnostic"]]]
 
 
 @click.command()
@@ -39,6 +45,9 @@ def validate(
     disabled: tuple[str, ...],
 ) -> None:
     """Check each MODEL and print its diagnostics (exit 0 clean, 1 errors, 2 unreadable)."""
+    from swarmgen import diagnostics as dg
+    from swarmgen import pipeline
+
     check_codes(disabled)
     found: Found = []
     for model in models:
@@ -64,6 +73,8 @@ def _print(text: str) -> None:
 
 def _summary(found: Found) -> None:
     """One line per model on stderr: `swarmgen: MODEL: N error(s), M warning(s)`."""
+    from swarmgen import diagnostics as dg
+
     for model, diagnostics in found:
         click.echo(f"swarmgen: {console.shown(model)}: {dg.summary_line(diagnostics)}", err=True)
 
@@ -72,6 +83,8 @@ def _json(found: Found) -> str:
     """One model: the document of `dg.render_json`. Several: the same document over every
     model's diagnostics (in argument order; each names its file) with the totals as `summary`,
     and `models`, one `{file, errors, warnings, exit_code}` per model, in argument order."""
+    from swarmgen import diagnostics as dg
+
     every = [d for _, diagnostics in found for d in diagnostics]
     if len(found) == 1:
         return dg.render_json(every)
@@ -82,6 +95,8 @@ def _json(found: Found) -> str:
 
 def _model_entry(model: Path, diagnostics: list[dg.Diagnostic]) -> dict[str, object]:
     """A model's line in the JSON document's `models`: its file as its diagnostics name it."""
+    from swarmgen import diagnostics as dg
+
     errors = sum(d.level is dg.Severity.ERROR for d in diagnostics)
     warnings = sum(d.level is dg.Severity.WARNING for d in diagnostics)
     exit_code = int(dg.exit_code_for(diagnostics))
@@ -90,4 +105,6 @@ def _model_entry(model: Path, diagnostics: list[dg.Diagnostic]) -> dict[str, obj
 
 def _sarif(found: Found) -> str:
     """SARIF 2.1.0: one run (one tool invocation), the results of every model."""
+    from swarmgen import diagnostics as dg
+
     return dg.render_sarif([d for _, diagnostics in found for d in diagnostics], __version__)

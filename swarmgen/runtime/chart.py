@@ -27,8 +27,13 @@ class Record(dict[str, Any]):
             raise AttributeError(name) from None
 
 
+_PLAIN = frozenset({str, int, float, bool, type(None)})  # what `record` returns as it is
+
+
 def record(value: Any) -> Any:
     """Deep-convert mappings to Records (lists are kept as lists of converted items)."""
+    if type(value) in _PLAIN:  # the common case, without the slow ABC checks below
+        return value
     if isinstance(value, Mapping):
         return Record({str(k): record(v) for k, v in value.items()})
     if isinstance(value, list | tuple):
@@ -58,6 +63,8 @@ def fill(value: Any, template: Any) -> Any:
     the template has, what is missing (or null) taking the template's value, recursively; a
     field the type does not have is dropped (a ROS message's `header.stamp` where the model's
     type has none, a sender's extra key), so a datum holds exactly its type's fields."""
+    if type(template) in _PLAIN:
+        return template if value is None else record(value)
     if isinstance(template, Mapping):
         given = value if isinstance(value, Mapping) else {}
         return Record({str(k): fill(given.get(k), default) for k, default in template.items()})
@@ -74,6 +81,81 @@ def fill_fields(data: Mapping[str, Any] | None, template: Mapping[str, Any]) -> 
     return filled
 
 
+Filler = Callable[[Any], Any]
+
+
+def filler(template: Any) -> Filler:
+    """`fill(value, template)` as a function of `value`, the template's walk done once (an
+    event's fields are filled on every arrival of the event)."""
+    if type(template) in _PLAIN:
+        return lambda value: template if value is None else record(value)
+    if not isinstance(template, Mapping):
+        return lambda value: record(template) if value is None else record(value)
+    parts = tuple((str(k), k, filler(default)) for k, default in template.items())
+    fresh = defaults_maker(template)
+
+    def fill_mapping(value: Any) -> Record:
+        if value is None:
+            return fresh()
+        given = value if isinstance(value, Mapping) else {}
+        return Record({key: part(given.get(k)) for key, k, part in parts})
+
+    return fill_mapping
+
+
+def defaults_maker(
+    template: Mapping[Any, Any], outer_key: Callable[[Any], Any] = str
+) -> Callable[[], Record]:
+    """A function making `fill(None, template)`: a new Record tree of the template's values.
+
+    Where every leaf is a plain value (the usual message type), it is one expression compiled
+    from the template's shape: it makes each Record of the tree with a single dict display,
+    instead of a call per field and level (an event's defaults are made on every arrival).
+    Only indices into `constants` appear in its text, never a key or a value of the model."""
+    constants: list[Any] = []
+
+    def text(value: Mapping[Any, Any], key_of: Callable[[Any], Any]) -> str | None:
+        items = []
+        for k, v in value.items():
+            constants.append(key_of(k))
+            key = f"C[{len(constants) - 1}]"
+            if type(v) in _PLAIN:
+                constants.append(v)
+                items.append(f"{key}: C[{len(constants) - 1}]")
+            elif isinstance(v, Mapping):
+                inner = text(v, str)
+                if inner is None:
+                    return None
+                items.append(f"{key}: {inner}")
+            else:
+                return None  # a list: made by `fill` itself
+        return "R({" + ", ".join(items) + "})"
+
+    expression = text(template, outer_key)
+    if expression is None:
+        return lambda: Record({outer_key(k): fill(None, v) for k, v in template.items()})
+    made: Callable[[], Record] = eval(
+        f"lambda: {expression}", {"__builtins__": {}, "R": Record, "C": tuple(constants)}
+    )
+    return made
+
+
+def fields_filler(template: Mapping[str, Any]) -> Callable[[Mapping[str, Any] | None], Record]:
+    """`fill_fields(data, template)` as a function of `data`, made once per event name."""
+    parts = tuple((key, filler(default)) for key, default in template.items())
+    fresh = defaults_maker(template, lambda key: key)  # `fill_fields` keeps the keys as they are
+
+    def fill_event(data: Mapping[str, Any] | None) -> Record:
+        if not isinstance(data, Mapping) or not data:
+            return fresh()
+        filled = Record({str(k): record(v) for k, v in data.items()})
+        for key, part in parts:
+            filled[key] = part(data.get(key))
+        return filled
+
+    return fill_event
+
+
 FINALIZE_PREFIX = "done.invoke."  # the host's word that a state's behaviour ended
 OUTCOME_PREFIX = "outcome."  # the outcome as the state's transitions see it
 # The step bound (docs/semantics.md): how many times the transitions that lie on a potential
@@ -82,6 +164,9 @@ OUTCOME_PREFIX = "outcome."  # the outcome as the state's transitions see it
 # a livelock ends its macrostep instead of spinning forever. The one place this number is
 # defined; the SCXML support script and every Python backend read it from here.
 STEP_BOUND = 1000
+# How many event names a node's lookup caches keep before they start over (events of names no
+# chart knows arrive from the swarm and from outside, and must not fill memory).
+CACHE_LIMIT = 1024
 
 
 class StepBoundExceeded(RuntimeError):
@@ -133,6 +218,8 @@ class Node:
         """This node's transitions whose descriptors match the event name, in document order."""
         found = self._by_event.get(name)
         if found is None:
+            if len(self._by_event) >= CACHE_LIMIT:  # distinct names without end: start over
+                self._by_event.clear()
             found = tuple(t for t in self.transitions if t.events and t.matches(name))
             self._by_event[name] = found
         return found
@@ -142,6 +229,8 @@ class Node:
         (`None`: eventless transitions); owners without candidates are left out."""
         found = self._chain.get(name)
         if found is None:
+            if len(self._chain) >= CACHE_LIMIT:
+                self._chain.clear()
             owners = (self, *self.ancestors)
             pairs = ((o, o.eventless if name is None else o.matching(name)) for o in owners)
             found = tuple((o, c) for o, c in pairs if c)
@@ -186,6 +275,8 @@ class Chart:
     data: dict[str, Any]  # initial member data
     names: dict[str, str]  # node id -> model name
     events: dict[str, dict[str, Any]] = field(default_factory=dict)  # event -> field defaults
+    # The dispatch tables its engines share (configuration.Tables), made by the first engine.
+    tables: Any = field(default=None, compare=False, repr=False)
 
     def fresh_data(self) -> Record:
         """A new copy of the initial member data, as Records."""

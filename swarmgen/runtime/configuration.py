@@ -1,14 +1,20 @@
 """Which states a microstep exits and enters: the set computations of the W3C SCXML 1.0
-algorithm (Appendix D), pure functions of the transitions, the configuration and the history."""
+algorithm (Appendix D), pure functions of the transitions, the configuration and the history.
+
+The engine does not run them per event: `Tables` interns each configuration it reaches, and a
+`Configuration` keeps, per event name, the transitions that could react (`Selection`) and, per
+set of enabled transitions, the whole microstep (`Plan`), computed once by these functions.
+"""
 
 from __future__ import annotations
 
-from collections.abc import Collection, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
-from swarmgen.runtime.chart import Node, Transition
+from swarmgen.runtime.chart import Action, Node, Record, Transition, fields_filler
 
-History = Mapping[Node, list[Node]]  # a history node -> the states it recorded
+History = Mapping[Node, Sequence[Node]]  # a history node -> the states it recorded
 
 
 def document_order(node: Node) -> int:
@@ -33,13 +39,13 @@ def exit_set(
     return to_exit
 
 
-def recorded_history(history_node: Node, state: Node, config: Collection[Node]) -> list[Node]:
+def recorded_history(history_node: Node, state: Node, config: Collection[Node]) -> tuple[Node, ...]:
     """What a history node of `state`, which is being exited, records, in document order."""
     if history_node.history == "deep":
         recorded = [s for s in config if s.is_atomic and is_descendant(s, state)]
     else:
         recorded = [s for s in config if s.parent is state]
-    return sorted(recorded, key=document_order)
+    return tuple(sorted(recorded, key=document_order))
 
 
 def in_final(state: Node, config: Collection[Node]) -> bool:
@@ -159,3 +165,206 @@ def _lcca(states: list[Node]) -> Node | None:
         if anc.kind in {"state", "scxml"} and all(is_descendant(s, anc) for s in rest):
             return anc
     return None
+
+
+def remove_conflicts(
+    enabled: Sequence[Transition], config: Collection[Node], history: History
+) -> tuple[Transition, ...]:
+    """The enabled transitions without those preempted by an earlier one whose exit set they
+    share (a transition from a descendant state wins over its ancestor's: SCXML 5.9.1)."""
+    filtered: list[Transition] = []
+    exit_sets: dict[int, set[Node]] = {}
+    for t1 in enabled:
+        exits1 = exit_sets.setdefault(id(t1), exit_set([t1], config, history))
+        preempted = False
+        to_remove: list[Transition] = []
+        for t2 in filtered:
+            if exits1 & exit_sets[id(t2)]:
+                if is_descendant(t1.source, t2.source):
+                    to_remove.append(t2)
+                else:
+                    preempted = True
+                    break
+        if not preempted:
+            filtered = [t for t in filtered if t not in to_remove]
+            filtered.append(t1)
+    return tuple(filtered)
+
+
+# --- dispatch tables: the set computations above, done once per configuration and event
+
+# Bounds on what the tables keep (a stream of distinct event names, or a chart whose parallel
+# regions reach very many configurations, must not fill memory): past them a table starts over,
+# which costs recomputation, never a different result.
+CONFIGURATION_LIMIT = 4096
+ENTRY_LIMIT = 1024
+
+Chain = tuple[tuple[Node, tuple[Transition, ...]], ...]  # (owner, candidates), innermost first
+# An entered state with the initial transition's and the history default's action it runs.
+Entry = tuple[Node, Action | None, Action | None]
+
+
+@dataclass(frozen=True, slots=True)
+class Selection:
+    """The transitions that could react to one event name in one configuration.
+
+    `chains`: per atomic state (document order) with candidates, the transition taken without
+    evaluating anything (its first candidate has no guard and is not bounded) or None, and its
+    candidates along the ancestors. `static`: the enabled transitions when every chain has one."""
+
+    chains: tuple[tuple[Transition | None, Chain], ...]
+    static: tuple[Transition, ...] | None
+
+    @classmethod
+    def of(cls, atomic: Sequence[Node], name: str | None) -> Selection:
+        """The selection of the event `name` (None: eventless) over these atomic states."""
+        chains: list[tuple[Transition | None, Chain]] = []
+        for state in atomic:
+            pairs = state.chain_candidates(name)
+            if pairs:
+                first = pairs[0][1][0]
+                chains.append((first if first.cond is None and not first.bounded else None, pairs))
+        static: list[Transition] | None = []
+        for fixed, _ in chains:
+            if fixed is None:
+                static = None
+                break
+            if static is not None and fixed not in static:
+                static.append(fixed)
+        return cls(tuple(chains), tuple(static) if static is not None else None)
+
+
+@dataclass(eq=False, slots=True)
+class Plan:
+    """One microstep, computed once: from a configuration, for the enabled transitions, under
+    the history values in `read` (the only ones its entry and exit sets depend on)."""
+
+    transitions: tuple[Transition, ...]  # taken (conflicts removed), in selection order
+    exits: tuple[Node, ...]  # exit order: reverse document order
+    records: tuple[tuple[Node, tuple[Node, ...]], ...]  # what exiting records in history nodes
+    entries: tuple[Entry, ...]  # entry order: document order
+    target: frozenset[Node]  # the configuration after the microstep
+    read: tuple[tuple[Node, Sequence[Node] | None], ...]
+    other: Plan | None = None  # the plan of the same transitions under other history values
+
+    def holds(self, history: History) -> bool:
+        """Whether the history has the values this plan was computed under."""
+        return all(history.get(node) == value for node, value in self.read)
+
+
+class _Reads(Mapping[Node, Sequence[Node]]):
+    """The history as a plan sees it: what the microstep's exits record, else the history
+    before it; remembers which history nodes were read there (the plan's key)."""
+
+    def __init__(self, history: History) -> None:
+        self.history = history
+        self.written: dict[Node, tuple[Node, ...]] = {}
+        self.read: dict[Node, Sequence[Node] | None] = {}
+
+    def __getitem__(self, node: Node) -> Sequence[Node]:
+        if node in self.written:
+            return self.written[node]
+        value = self.history.get(node)
+        self.read.setdefault(node, value)
+        if value is None:
+            raise KeyError(node)
+        return value
+
+    def __iter__(self) -> Iterator[Node]:
+        return iter({**self.history, **self.written})
+
+    def __len__(self) -> int:
+        return len({**self.history, **self.written})
+
+
+def make_plan(config: frozenset[Node], enabled: Sequence[Transition], history: History) -> Plan:
+    """The microstep that takes `enabled` from `config` (the W3C algorithm's `microstep`)."""
+    reads = _Reads(history)
+    taken = remove_conflicts(enabled, config, reads) if len(enabled) > 1 else tuple(enabled)
+    exits = tuple(sorted(exit_set(taken, config, reads), key=document_order, reverse=True))
+    for state in exits:  # recorded before any state is left, as `exitStates` does
+        for child in state.children:
+            if child.kind == "history":
+                reads.written[child] = recorded_history(child, state, config)
+    records = tuple(reads.written.items())
+    entry = entry_set(taken, reads)  # sees the history the exits just recorded
+    entries: list[Entry] = []
+    for state in sorted(entry.to_enter, key=document_order):
+        initial = state.initial if state in entry.default_entry else None
+        default = entry.history_content.get(state)
+        entries.append(
+            (
+                state,
+                initial.action if initial is not None else None,
+                default.action if default is not None else None,
+            )
+        )
+    target = config.difference(exits) | entry.to_enter
+    return Plan(taken, exits, records, tuple(entries), target, tuple(reads.read.items()))
+
+
+class Configuration:
+    """A configuration the engine reached, with its selections and plans as they are needed."""
+
+    __slots__ = ("atomic", "eventless", "plans", "selections", "states")
+
+    def __init__(self, states: frozenset[Node]) -> None:
+        self.states = states
+        self.atomic = tuple(sorted((n for n in states if n.is_atomic), key=document_order))
+        self.eventless = Selection.of(self.atomic, None)  # looked at after every microstep
+        self.selections: dict[str | None, Selection] = {}
+        self.plans: dict[tuple[Transition, ...], Plan] = {}
+
+    def selection(self, name: str) -> Selection:
+        """What could react to the event `name`."""
+        found = self.selections.get(name)
+        if found is None:
+            if len(self.selections) >= ENTRY_LIMIT:
+                self.selections.clear()
+            found = self.selections[name] = Selection.of(self.atomic, name)
+        return found
+
+    def plan(self, enabled: tuple[Transition, ...], history: History) -> Plan:
+        """The microstep taking `enabled` under the current history."""
+        first = self.plans.get(enabled)
+        plan = first
+        while plan is not None:
+            if not plan.read or plan.holds(history):
+                return plan
+            plan = plan.other
+        if len(self.plans) >= ENTRY_LIMIT:
+            self.plans.clear()
+            first = None
+        made = make_plan(self.states, enabled, history)
+        made.other = first
+        self.plans[enabled] = made
+        return made
+
+
+class Tables:
+    """A chart's dispatch tables: the configurations reached so far, interned (engines of the
+    same chart share them: a plan depends on nothing an engine has of its own)."""
+
+    __slots__ = ("configurations", "fillers")
+
+    def __init__(self) -> None:
+        self.configurations: dict[frozenset[Node], Configuration] = {}
+        self.fillers: dict[str, Callable[[Mapping[str, Any] | None], Record]] = {}
+
+    def filler(
+        self, name: str, template: Mapping[str, Any]
+    ) -> Callable[[Mapping[str, Any] | None], Record]:
+        """`fill_fields` for the event `name` (whose declared fields `template` has)."""
+        found = self.fillers.get(name)
+        if found is None:
+            found = self.fillers[name] = fields_filler(template)
+        return found
+
+    def configuration(self, states: frozenset[Node]) -> Configuration:
+        """The interned configuration of these states."""
+        found = self.configurations.get(states)
+        if found is None:
+            if len(self.configurations) >= CONFIGURATION_LIMIT:
+                self.configurations.clear()
+            found = self.configurations[states] = Configuration(states)
+        return found

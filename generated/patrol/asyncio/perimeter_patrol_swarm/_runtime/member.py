@@ -156,6 +156,9 @@ class Member:
         self.engine = Engine(chart, self, member_id)
         self.queue: asyncio.Queue[Event | None] = asyncio.Queue()
         self.tasks: dict[Node, asyncio.Task[None]] = {}
+        # Behaviours started in the events being drained whose task is not made yet (see
+        # `_make_tasks`): state -> (call, behaviour, request, activation).
+        self._starting: dict[Node, tuple[Call, Behaviour, Request, int]] = {}
         self.timers: dict[str, asyncio.TimerHandle] = {}
         self.errors: list[str] = []
         self.faults: list[Fault] = []
@@ -175,6 +178,7 @@ class Member:
         self._trace(None)
         try:
             while self.engine.running:
+                self._make_tasks()
                 event = await self.queue.get()
                 drained = 0
                 while event is not None:  # drain what is queued without yielding per event
@@ -186,11 +190,13 @@ class Member:
                     if drained % DRAIN_BATCH == 0:
                         # a queue that never empties (a member that answers its own swarm
                         # events) must not starve timers, behaviours and --duration
+                        self._make_tasks()
                         await asyncio.sleep(0)
                     event = self.queue.get_nowait()
                 if event is None:
                     break
         finally:
+            self._make_tasks()
             await self._cancel_all()
 
     def stop(self) -> None:
@@ -199,6 +205,8 @@ class Member:
 
     def deliver(self, event: Event) -> None:
         """Queue an event for the engine."""
+        if self._starting:  # the put may wake a waiting task: see `_make_tasks`
+            self._make_tasks()
         self.queue.put_nowait(event)
 
     @property
@@ -213,6 +221,7 @@ class Member:
 
     def _trace(self, event: Event | None) -> None:
         if self.tracer is not None:
+            self._make_tasks()  # the tracer may look at the tasks, or schedule callbacks
             self.tracer.step(self, event)
 
     def add_error(self, text: str) -> None:
@@ -268,12 +277,32 @@ class Member:
             self._emit,
             self.engine.data,
         )
-        self.tasks[node] = asyncio.get_running_loop().create_task(
-            self._run_behaviour(node, call, behaviour, request, activation),
-            name=f"{self.member_id}:{node.id}",
-        )
+        if node in self._starting:
+            self._make_tasks()
+        self._starting[node] = (call, behaviour, request, activation)
+
+    def _make_tasks(self) -> None:
+        """Make the tasks of the behaviours started since the last call, in start order.
+
+        A task made during a drain only runs once the member yields to the event loop, and a
+        task cancelled before its first step runs nothing of its coroutine. So the task is
+        made late, when the member is about to yield or to do anything that can put a callback
+        on the loop (another task's wake-up: a cancellation, a publication, a tracer, a failed
+        start), and a behaviour whose state is left before that is never made a task at all
+        (most of them, when events arrive back to back). The loop then runs exactly the steps,
+        in exactly the order, it would have run had every task been made at its start."""
+        if not self._starting:
+            return
+        starting, self._starting = self._starting, {}
+        loop = asyncio.get_running_loop()
+        for node, (call, behaviour, request, activation) in starting.items():
+            self.tasks[node] = loop.create_task(
+                self._run_behaviour(node, call, behaviour, request, activation),
+                name=f"{self.member_id}:{node.id}",
+            )
 
     def _fail_at_start(self, node: Node, call: Call, activation: int, error: str) -> None:
+        self._make_tasks()
         self.report(Fault("failed", call.behaviour, node.id, error))
         # on the next turn of the loop, not in this macrostep's drain: a state that re-enters
         # itself on `aborted` then cycles without keeping the loop from other work
@@ -335,8 +364,11 @@ class Member:
 
     def cancel_call(self, node: Node, activation: int) -> None:
         """Cancel a state's behaviour; it gets a grace period to end."""
+        if self._starting.pop(node, None) is not None:
+            return  # its task is not made: cancelled before its first step, it runs nothing
         task = self.tasks.pop(node, None)
         if task is not None and not task.done():
+            self._make_tasks()  # the cancellation schedules the task's wake-up
             self._cancel(task, node, "on preemption")
             if self._sweep is None:  # one timer per member, not one per cancellation
                 self._sweep = asyncio.get_running_loop().call_later(self.grace, self._sweep_now)
@@ -386,6 +418,7 @@ class Member:
 
     def send_swarm(self, event: Event) -> None:
         """Publish `event` on the bus, in its declared scope."""
+        self._make_tasks()  # the bus may wake other members
         self.bus.publish(event, self.event_scopes.get(event.name, "swarm"))
 
     def _emit(self, name: str, data: Mapping[str, Any] | None, scope: str = "swarm") -> None:

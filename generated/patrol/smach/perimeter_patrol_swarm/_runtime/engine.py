@@ -13,7 +13,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections import deque
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,16 +27,15 @@ from .chart import (
     Node,
     StepBoundExceeded,
     Transition,
-    fill_fields,
     record,
 )
 from .configuration import (
+    Configuration,
+    Plan,
+    Selection,
+    Tables,
     document_order,
-    entry_set,
-    exit_set,
     in_final,
-    is_descendant,
-    recorded_history,
 )
 from .host import Event, Host, NullHost
 
@@ -58,14 +57,19 @@ class Engine:
         self.ctx = Context(self, self.data)
         self.config: set[Node] = set()
         self.internal: deque[Event] = deque()
-        self.history: dict[Node, list[Node]] = {}
+        self.history: dict[Node, tuple[Node, ...]] = {}
         self.running = False
         self.finished = False
         self._to_invoke: set[Node] = set()
         self._activation: dict[Node, int] = {}
         self._ids = itertools.count(1)
-        self._active_ids: frozenset[str] | None = None
-        self._atomic: list[Node] | None = None  # atomic states of the configuration, in order
+        self._events = self.chart.events
+        if self.chart.tables is None:
+            self.chart.tables = Tables()
+        self._tables: Tables = self.chart.tables
+        # The interned configuration, None while a microstep changes `config` (or after one
+        # was interrupted by an exception): the next selection interns `config` again.
+        self._cfg: Configuration | None = None
         self.error_count = 0  # error.execution events raised so far (traces report them)
         # The step bound (docs/semantics.md): bounded transitions taken since the count last
         # restarted, whether that count's error was raised, and the input that restarted it.
@@ -82,7 +86,8 @@ class Engine:
         root = self.chart.root
         if root.initial is None:
             raise ValueError(f"chart {self.chart.name} has no initial state")
-        self._enter_states([root.initial])
+        self._cfg = None
+        self._enter(self._configuration().plan((root.initial,), self.history))
         self._macrostep()
 
     def send(self, event: Event) -> None:
@@ -91,11 +96,12 @@ class Engine:
             return
         if event.origin is not None and not self._current_activation(event.origin):
             return  # the outcome of a behaviour that was cancelled: discarded
-        template = self.chart.events.get(event.name)
+        name = event.name
+        template = self._events.get(name)
         if template:  # the value rule: a declared field the sender left out holds its default
-            event.data = fill_fields(event.data, template)
+            event.data = self._tables.filler(name, template)(event.data)
         self.ctx.event = event
-        enabled = self._select_transitions(event)
+        enabled = self._choose((self._cfg or self._configuration()).selection(name))
         if enabled:
             self._microstep(enabled)
         self._macrostep()
@@ -129,9 +135,8 @@ class Engine:
 
     def is_active(self, node_id: str) -> bool:
         """Whether the state with this id is in the configuration."""
-        if self._active_ids is None:
-            self._active_ids = frozenset(n.id for n in self.config)
-        return node_id in self._active_ids
+        node = self.chart.nodes.get(node_id)
+        return node is not None and node in self.config
 
     # --- services for actions (Context)
 
@@ -152,27 +157,29 @@ class Engine:
 
     def _macrostep(self) -> None:
         while self.running:
-            enabled = self._select_transitions(None)
+            cfg = self._cfg or self._configuration()
+            enabled = self._choose(cfg.eventless) if cfg.eventless.chains else ()
             if not enabled:
                 if not self.internal:
                     break
                 event = self.internal.popleft()
                 self.ctx.event = event
-                enabled = self._select_transitions(event)
+                enabled = self._choose(cfg.selection(event.name))
             if enabled:
                 self._microstep(enabled)
-        self._start_calls()
+        if self._to_invoke:
+            self._start_calls()
 
     def _start_calls(self) -> None:
-        for node in sorted(self._to_invoke, key=document_order):
-            if node in self.config and node.call is not None:
-                activation = self._activation.get(node, 0) + 1
-                self._activation[node] = activation
-                args = self._arguments(node, node.call)
-                self.host.start_call(
-                    node, node.call, args if isinstance(args, dict) else {}, activation
-                )
-        self._to_invoke.clear()
+        invoke = self._to_invoke
+        config, activations = self.config, self._activation
+        for node in tuple(invoke) if len(invoke) == 1 else sorted(invoke, key=document_order):
+            call = node.call
+            if call is not None and node in config:
+                activation = activations.get(node, 0) + 1
+                activations[node] = activation
+                self.host.start_call(node, call, self._arguments(node, call), activation)
+        invoke.clear()
 
     def _arguments(self, node: Node, call: Call) -> dict[str, Any]:
         """A behaviour's inputs. An input that cannot be computed is the host's business (the
@@ -189,31 +196,40 @@ class Engine:
         node = self.chart.nodes.get(origin[0])
         return node is not None and node in self.config and self._activation.get(node) == origin[1]
 
-    def _atomic_states(self) -> list[Node]:
-        if self._atomic is None:
-            self._atomic = sorted((n for n in self.config if n.is_atomic), key=document_order)
-        return self._atomic
+    def _configuration(self) -> Configuration:
+        if self._cfg is None:
+            self._cfg = self._tables.configuration(frozenset(self.config))
+        return self._cfg
 
-    def _select_transitions(self, event: Event | None) -> list[Transition]:
-        enabled: list[Transition] = []
-        name = None if event is None else event.name
-        for state in self._atomic_states():
-            for owner, candidates in state.chain_candidates(name):
-                chosen = self._first_enabled(owner, candidates)
-                if chosen is not None:
-                    if chosen not in enabled:
-                        enabled.append(chosen)
-                    break
-        return self._remove_conflicts(enabled) if len(enabled) > 1 else enabled
-
-    def _first_enabled(self, owner: Node, candidates: tuple[Transition, ...]) -> Transition | None:
+    def _choose(self, selection: Selection) -> tuple[Transition, ...]:
+        """The enabled transitions of a selection, before conflicts are removed: per atomic
+        state in document order, the first enabled one along its chain."""
+        if not selection.chains:
+            return ()
+        # The step bound's restart, which the first transition considered triggers.
         if self._bounded and self.ctx.event is not self._input:
             self._restart_count(self.ctx.event)
+        if selection.static is not None:
+            return selection.static
+        enabled: list[Transition] = []
+        for fixed, chain in selection.chains:
+            chosen = fixed
+            if chosen is None:
+                for owner, candidates in chain:
+                    chosen = self._first_enabled(owner, candidates)
+                    if chosen is not None:
+                        break
+                else:
+                    continue
+            if chosen not in enabled:
+                enabled.append(chosen)
+        return tuple(enabled)
+
+    def _first_enabled(self, owner: Node, candidates: tuple[Transition, ...]) -> Transition | None:
         for transition in candidates:
-            if (
-                transition.cond is None
-                or self._guarded(transition.cond, f"guard in {owner.id}") is True
-            ) and (not transition.bounded or self._step_allowed(owner)):
+            if (transition.cond is None or self._guarded(transition.cond, owner) is True) and (
+                not transition.bounded or self._step_allowed(owner)
+            ):
                 return transition
         return None
 
@@ -238,74 +254,54 @@ class Engine:
             self._error(f"step bound in {owner.id}", StepBoundExceeded(message))
         return False
 
-    def _remove_conflicts(self, enabled: list[Transition]) -> list[Transition]:
-        filtered: list[Transition] = []
-        exit_sets: dict[int, set[Node]] = {}
-        for t1 in enabled:
-            exits1 = exit_sets.setdefault(id(t1), self._exit_set([t1]))
-            preempted = False
-            to_remove: list[Transition] = []
-            for t2 in filtered:
-                if exits1 & exit_sets[id(t2)]:
-                    if is_descendant(t1.source, t2.source):
-                        to_remove.append(t2)
-                    else:
-                        preempted = True
-                        break
-            if not preempted:
-                filtered = [t for t in filtered if t not in to_remove]
-                filtered.append(t1)
-        return filtered
-
-    def _microstep(self, enabled: list[Transition]) -> None:
-        self._exit_states(enabled)
-        for transition in enabled:
-            self._run(transition.action, f"transition from {transition.source.id}")
-        self._enter_states(enabled)
-        self._active_ids = None
-        self._atomic = None
-
-    def _exit_set(self, transitions: Iterable[Transition]) -> set[Node]:
-        return exit_set(transitions, self.config, self.history)
-
-    def _exit_states(self, enabled: list[Transition]) -> None:
-        to_exit = sorted(self._exit_set(enabled), key=document_order, reverse=True)
-        self._to_invoke.difference_update(to_exit)
-        for state in to_exit:
-            for child in state.children:
-                if child.kind == "history":
-                    self.history[child] = recorded_history(child, state, self.config)
-        for state in to_exit:
-            self._leave(state)
-            self.config.discard(state)
-        self._active_ids = None
-        self._atomic = None
+    def _microstep(self, enabled: tuple[Transition, ...]) -> None:
+        plan = (self._cfg or self._configuration()).plan(enabled, self.history)
+        self._cfg = None
+        if plan.exits:  # history is recorded first, then the states are left in exit order
+            if self._to_invoke:
+                self._to_invoke.difference_update(plan.exits)
+            for node, recorded in plan.records:
+                self.history[node] = recorded
+            config = self.config
+            for state in plan.exits:
+                if state.call is not None or state.timers or state.onexit is not None:
+                    self._leave(state)
+                config.discard(state)
+        for transition in plan.transitions:
+            if transition.action is not None:
+                self._run(transition.action, "transition from", transition.source)
+        self._enter(plan)
 
     def _leave(self, state: Node) -> None:
         """Cancel a state's behaviour and timers and run its exit actions."""
-        if state.call is not None and state in self._activation:
-            self.host.cancel_call(state, self._activation[state])
-            self._activation[state] += 1  # late outcomes of this activation are stale
+        activation = self._activation.get(state) if state.call is not None else None
+        if activation is not None:
+            self.host.cancel_call(state, activation)
+            self._activation[state] = activation + 1  # late outcomes of it are stale
         for event, _ in state.timers:
             self.host.cancel_timer(state, event)
-        self._run(state.onexit, f"exit of {state.id}")
+        if state.onexit is not None:
+            self._run(state.onexit, "exit of", state)
 
-    def _enter_states(self, enabled: list[Transition]) -> None:
-        entry = entry_set(enabled, self.history)
-        for state in sorted(entry.to_enter, key=document_order):
-            self.config.add(state)
-            self._active_ids = None
-            self._atomic = None
-            self._to_invoke.add(state)
-            self._run(state.onentry, f"entry of {state.id}")
+    def _enter(self, plan: Plan) -> None:
+        """Enter the plan's entry set in document order; the configuration is then its target."""
+        self._cfg = None
+        config = self.config
+        for state, initial, default in plan.entries:
+            config.add(state)
+            if state.call is not None:  # only these start a behaviour (`_start_calls`)
+                self._to_invoke.add(state)
+            if state.onentry is not None:
+                self._run(state.onentry, "entry of", state)
             for event, delay in state.timers:
                 self.host.start_timer(state, event, delay)
-            if state in entry.default_entry and state.initial is not None:
-                self._run(state.initial.action, f"initial transition of {state.id}")
-            if state in entry.history_content:
-                self._run(entry.history_content[state].action, f"history default in {state.id}")
+            if initial is not None:
+                self._run(initial, "initial transition of", state)
+            if default is not None:
+                self._run(default, "history default in", state)
             if state.kind == "final":
                 self._reached_final(state)
+        self._cfg = self._tables.configuration(plan.target)
 
     def _reached_final(self, state: Node) -> None:
         parent = state.parent
@@ -333,20 +329,19 @@ class Engine:
 
     # --- executable content
 
-    def _run(self, action: Callable[[Context], None] | None, where: str) -> None:
-        if action is None:
-            return
+    def _run(self, action: Callable[[Context], None], what: str, node: Node) -> None:
+        """Run executable content; `what` and the node say where, when it fails (the text is
+        made only then: this runs for every action)."""
         try:
             action(self.ctx)
         except Exception as err:  # SCXML: an error stops the block and raises error.execution
-            self._error(where, err)
-        self._active_ids = None
+            self._error(f"{what} {node.id}", err)
 
-    def _guarded(self, function: Callable[[Context], Any], where: str) -> Any:
+    def _guarded(self, function: Callable[[Context], Any], owner: Node) -> Any:
         try:
             return function(self.ctx)
         except Exception as err:  # a guard that cannot be evaluated is false (SCXML 5.9)
-            self._error(where, err)
+            self._error(f"guard in {owner.id}", err)
             return None
 
     def _error(self, where: str, err: BaseException) -> None:
