@@ -18,6 +18,7 @@ passes the prefixes it built.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import json
 import os
@@ -38,6 +39,7 @@ from swarmgen.backends.rclpy_backend import (
 from swarmgen.chart.model import Chart
 from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import Model
+from swarmgen.ros import domains
 from swarmgen.ros.interfaces import InterfaceBuildError, build_and_install
 
 
@@ -70,6 +72,13 @@ def prefix_env(prefixes: Sequence[Path], env: dict[str, str]) -> None:
             env[variable] = os.pathsep.join(parts)
 
 
+@functools.cache
+def own_domain() -> int:
+    """This process's ROS domain for the subprocesses it starts: one, leased for its lifetime
+    (swarmgen/ros/domains.py), so two harnesses on one machine never share a domain."""
+    return domains.hold(1, 139, start=1 + os.getpid() % 139)
+
+
 def ros_env(
     log_dir: Path,
     *,
@@ -87,7 +96,8 @@ def ros_env(
     env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery
     if domain_id is not None:
         env["ROS_DOMAIN_ID"] = str(domain_id)
-    env.setdefault("ROS_DOMAIN_ID", str(1 + os.getpid() % 200))
+    if "ROS_DOMAIN_ID" not in env:  # this process's own, leased (never another run's)
+        env["ROS_DOMAIN_ID"] = str(own_domain())
     env["ROS_LOG_DIR"] = str(log_dir)
     env.setdefault("HOME", str(log_dir))
     if python_path:

@@ -29,13 +29,14 @@ pytest.importorskip("psutil", reason="psutil comes with the `ros` extra: run `ma
 
 from swarmgen import pipeline
 from swarmgen import ros_harness as harness
+from swarmgen.ros.domains import hold
 from tests import rosproc
 from tests.conftest import ROOT
 from tests.test_detailed_servers import UAV, UGV
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 LIBRARY = ROOT / "swarmgen" / "ros" / "library"
-DOMAIN = 1 + (os.getpid() + 25) % 100
+DOMAIN = hold(1, 139, start=1 + (os.getpid() + 25) % 100)  # leased: see swarmgen/ros/domains.py
 DT = 0.125  # binary-exact steps: 1 m/s is 0.125 m per step
 SUCCEEDED = 4  # action_msgs/GoalStatus
 Run = tuple[int, str, dict[str, Any], dict[str, Any]]

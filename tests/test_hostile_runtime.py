@@ -24,6 +24,7 @@ from typing import Any
 
 import pytest
 
+from swarmgen.ros.domains import hold
 from tests.hostile import Outcome, assert_clean, assert_refused, run_module, swarmgen
 from tests.modelkit import ModelKit
 
@@ -463,7 +464,7 @@ def test_ros_failing_server_aborts_the_goal(ros_built: Path, tmp_path: Path, cas
     work = {"duration": 0.05, **behaviour}
     script.write_text(json.dumps({"behaviours": {"Work": work}}), encoding="utf-8")
     (module,) = {p.parent.name for p in ros_built.glob("*/launch_swarm.py")}
-    env = harness.ros_env(tmp_path / "roslog", domain_id=201 + os.getpid() % 20)
+    env = harness.ros_env(tmp_path / "roslog", domain_id=hold(1, 139, start=201 + os.getpid() % 20))
     env["PYTHONPATH"] = str(ros_built)
     command = [
         sys.executable,

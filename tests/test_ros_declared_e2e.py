@@ -30,13 +30,14 @@ pytest.importorskip("psutil", reason="psutil comes with the `ros` extra: run `ma
 from swarmgen import pipeline
 from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import nodes_package
+from swarmgen.ros.domains import hold
 from tests import rosproc
 from tests.conftest import ROOT
 
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 INTERFACES = SAR.parent / "interfaces"
 # one domain per test run, apart from test_ros_e2e's (101 + pid % 100) in the same run
-DOMAIN = 101 + (os.getpid() + 50) % 100
+DOMAIN = hold(1, 139, start=101 + (os.getpid() + 50) % 100)  # leased: see swarmgen/ros/domains.py
 TIME_SCALE = 0.25  # wall seconds per simulated second
 MEMBERS = ["uav_1", "uav_2", "ugv_1", "ugv_2"]
 

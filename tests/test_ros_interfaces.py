@@ -13,6 +13,7 @@ from typing import Any
 
 import pytest
 
+from swarmgen.ros.domains import hold
 from swarmgen.ros.interfaces import (
     ACTIVE_STATES_MSG,
     BUILD_STAMP,
@@ -28,6 +29,7 @@ from swarmgen.ros.interfaces import (
 from tests.skips import need_rclpy
 
 PACKAGE = "sgtest_interfaces"
+DOMAIN = hold(1, 139, start=1 + os.getpid() % 100)  # leased: see swarmgen/ros/domains.py
 COVERAGE = behaviour_action(
     [("altitude", "Real")], [("target_id", "Integer"), ("target_pose", "Pose")]
 )
@@ -199,7 +201,7 @@ def _ros_env(tmp_path: Path) -> dict[str, str]:
     env = dict(os.environ)
     env.update(
         ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",  # no multicast on the real network
-        ROS_DOMAIN_ID=str(1 + os.getpid() % 100),  # isolates concurrent test runs
+        ROS_DOMAIN_ID=str(DOMAIN),  # isolates concurrent test runs
         ROS_LOG_DIR=str(tmp_path / "roslog"),
         HOME=str(tmp_path),  # rclpy's logging needs one; keeps ~/.ros out of the real HOME
     )

@@ -29,13 +29,14 @@ import pytest
 
 pytest.importorskip("rclpy", reason="rclpy comes with the `ros` extra: run `make ros`")
 
+from swarmgen.ros.domains import hold
 from swarmgen.ros.interfaces import build_and_install
 from swarmgen.ros_harness import ros_env
 from tests import rosproc
 from tests.conftest import ROOT
 from tests.ros_platform.packages import build_packages
 
-DOMAIN = 1 + (os.getpid() + 75) % 100
+DOMAIN = hold(1, 139, start=1 + (os.getpid() + 75) % 100)  # leased: see swarmgen/ros/domains.py
 NAMESPACE = "/loss"
 SERVER_LOST_S = 2.0  # the member parameter's default
 LEASE = """<?xml version="1.0" encoding="UTF-8"?>

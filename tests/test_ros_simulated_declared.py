@@ -20,11 +20,12 @@ from typing import Any
 
 import pytest
 
+from swarmgen.ros.domains import hold
 from swarmgen.ros_harness import ros_env
 from tests.conftest import ROOT
 from tests.hostile import run_module
 
-DOMAIN = 201 + os.getpid() % 30
+DOMAIN = hold(1, 139, start=201 + os.getpid() % 30)  # leased: see swarmgen/ros/domains.py
 PACKAGE = "sgsimdecl_interfaces"
 GOTO = ("platform_msgs", "action", "GoTo")
 TRIGGER = ("std_srvs", "srv", "Trigger")

@@ -29,7 +29,7 @@ from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import nodes_package
 from swarmgen.sim.batch import Config
 from swarmgen.sim.detailed.bags import record_run
-from swarmgen.sim.detailed.domains import lease
+from swarmgen.ros.domains import lease
 from swarmgen.sim.detailed.plan import Planner, RunPlan
 from swarmgen.sim.detailed.procs import ProcessGroup
 from swarmgen.sim.scenario import SimulationError
