@@ -59,19 +59,29 @@ def script_specs(charts: tuple[Chart, ...]) -> dict[str, dict[str, Any]]:
         waited = {
             e for n in nodes for t in n.transitions for e in t.events if e.startswith("outcome.")
         }
+        ended = _waited_ids(waited)
         for node in nodes:
             if node.call is None:
                 continue
             info = next(b for b in chart.behaviours if b.name == node.call.behaviour)
-            ended = any(
-                e == f"outcome.{node.id}" or e.startswith(f"outcome.{node.id}.") for e in waited
-            )
-            if not ended:
+            if node.id not in ended:
                 scripts.setdefault(info.name, {"forever": True})
                 continue
             outputs = {name: zero_of(type_) for name, type_ in info.outputs}
             scripts[info.name] = {"duration": 1.0, "outcome": "succeeded", "outputs": outputs}
     return dict(sorted(scripts.items()))
+
+
+def _waited_ids(waited: set[str]) -> set[str]:
+    """The node ids whose outcome some `outcome.<id>` or `outcome.<id>.<outcome>` event waits
+    for: each event names its id, or a prefix of it up to a dot (ids may hold dots). A set, so
+    that the look-up per node does not go over every event."""
+    ids: set[str] = set()
+    for event in waited:
+        rest = event[len("outcome.") :]
+        ids.add(rest)
+        ids.update(rest[:i] for i, char in enumerate(rest) if char == ".")
+    return ids
 
 
 def default_scripts(charts: tuple[Chart, ...]) -> str:

@@ -11,24 +11,41 @@ import functools
 from dataclasses import dataclass, field
 from typing import Any
 
-import black
-from black.mode import TargetVersion
-
+from swarmgen.backends import pyformat
 from swarmgen.chart import model as c
 from swarmgen.ir import expr
 from swarmgen.names import identifier
 from swarmgen.runtime.chart import zero_like
 
-BLACK_MODE = black.Mode(line_length=100, target_versions={TargetVersion.PY311})
+LINE_LENGTH = pyformat.LINE_LENGTH
+
+
+def black_mode(line_length: int = LINE_LENGTH) -> Any:
+    """The project's black mode (black pinned: its output is in golden files and generated/).
+    Imported here, not at module level: black is only the fallback of `format_python` and the
+    reference of tests/test_black_stable.py, never on the compile path of the shipped forms."""
+    import black
+    from black.mode import TargetVersion
+
+    return black.Mode(line_length=line_length, target_versions={TargetVersion.PY311})
+
+
+def black_statement(statement: str, indent: int) -> str:
+    """One statement formatted by black, as if it stood `indent` columns deep."""
+    import black
+
+    return str(black.format_str(statement, mode=black_mode(LINE_LENGTH - indent)))
 
 
 @functools.lru_cache(maxsize=1024)
 def format_python(source: str) -> str:
-    """black, pinned (its output is in golden files and generated/). Memoised in this process
-    only: an on-disk cache under the user's cache directory would let whoever can write there
-    choose the bytes swarmgen emits, and generated code must be a function of the model and
-    swarmgen's version alone (docs/security.md)."""
-    return black.format_str(source, mode=BLACK_MODE)
+    """Generated Python exactly as black (pinned, `black_mode()`) prints it, made by
+    `pyformat` without running black; a statement pyformat does not reproduce goes through
+    black alone (`pyformat.STATS` counts them). Memoised in this process only: an on-disk
+    cache under the user's cache directory would let whoever can write there choose the bytes
+    swarmgen emits, and generated code must be a function of the model and swarmgen's version
+    alone (docs/security.md)."""
+    return pyformat.format_source(source, black_statement)
 
 
 # What each kind of helper function returns: guards, actions, call arguments and goal callbacks.
@@ -151,7 +168,8 @@ class ChartRenderer:
     def _action_lines(self, action: c.Action) -> list[str]:
         if isinstance(action, c.Assign):
             self._reads_data = True
-            return [f"d[{action.location!r}] = {self.py(action.value)}"]
+            # black drops parentheses around a whole right-hand side: printed without them
+            return [f"d[{action.location!r}] = {_unwrap(self.py(action.value))}"]
         if isinstance(action, c.Raise | c.Send):
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
@@ -225,8 +243,9 @@ def _unwrap(text: str) -> str:
     would be fooled by those inside string literals)."""
     if text.startswith("(") and text.endswith(")"):
         try:
-            ast.parse(text[1:-1], mode="eval")
+            inner = ast.parse(text[1:-1], mode="eval")
         except SyntaxError:
             return text
-        return text[1:-1]
+        # a tuple keeps its parentheses (black keeps them too)
+        return text if isinstance(inner.body, ast.Tuple) else text[1:-1]
     return text
