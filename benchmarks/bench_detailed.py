@@ -42,20 +42,10 @@ MODEL = ROOT / "sample_models" / "sar" / "sar.xmi"
 RESULTS = ROOT / "benchmarks" / "results" / "detailed.json"
 
 
-# `swarmgen simulate --level detailed` gives its runs ROS domains from 140 on, per process: two
-# invocations at once (a test suite elsewhere on the machine) would share domain 140 and hear
-# each other's swarm events. The benchmark's invocations take domains of their own instead.
-DOMAINS = (200, 232)  # Fast DDS's ports allow domain ids up to 232
-LAUNCH = (
-    "import sys; from swarmgen.sim.detailed import run; run.DOMAINS = range(*map(int, "
-    "sys.argv.pop(1).split(':'))); from swarmgen.cli import run as cli; sys.argv[0] = 'swarmgen';"
-    " cli()"
-)
-
-
 def swarmgen_command(*args: str) -> list[str]:
-    """`swarmgen ARGS` as a process whose detailed runs use the benchmark's ROS domains."""
-    return [sys.executable, "-c", LAUNCH, f"{DOMAINS[0]}:{DOMAINS[1]}", *args]
+    """`swarmgen ARGS` as a whole process (its detailed runs lease ROS domains machine-wide,
+    swarmgen/ros/domains.py, so a test suite beside the benchmark never shares one)."""
+    return [sys.executable, "-m", "swarmgen", *args]
 
 
 SIZES = (1, 2, 4, 8)

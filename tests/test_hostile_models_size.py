@@ -28,7 +28,7 @@ from tests.hostile import ROOT, assert_clean, assert_refused, snapshot, swarmgen
 from tests.modelkit import Machine, ModelKit
 
 BASE = ROOT / "tests" / "fixtures" / "bad" / "valid_base.xmi"
-LIMIT = 5.0  # seconds of work for a case that used to take minutes or never end
+LIMIT = 5.0  # CPU seconds of work for a case that used to take minutes or never end
 
 
 # --- model builders
@@ -155,9 +155,11 @@ def write(tmp_path: Path, kit: ModelKit | str, name: str = "model.xmi") -> Path:
 
 
 def timed_validate(path: Path) -> tuple[list[Diagnostic], float]:
-    started = time.perf_counter()
+    """The diagnostics and the CPU seconds validation took: CPU, not wall time, so the bound
+    (which tells "finishes" from "runs for minutes") holds on a loaded machine too."""
+    started = time.process_time()
     validation = pipeline.validate(path)
-    return validation.diagnostics, time.perf_counter() - started
+    return validation.diagnostics, time.process_time() - started
 
 
 def codes(found: list[Diagnostic]) -> list[str]:

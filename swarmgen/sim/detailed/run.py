@@ -3,8 +3,8 @@ real ROS 2 run (docs/detailed.md, "Running the detailed level").
 
 A run is three process groups in one ROS domain of its own, on simulated time: the behaviour
 servers (`swarmgen_library.servers`), the generated swarm, unmodified (`launch_swarm
---no-simulation`, `use_sim_time`), and, once every member has entered its initial
-configuration, the world node, the only clock. The run ends when the world node writes its
+--no-simulation`, `use_sim_time`), and, once the swarm is connected and waits for the world's
+first probe, the world node, the only clock. The run ends when the world node writes its
 result; then every process is stopped (`procs.ProcessGroup`: nothing outlives a run, also on
 Ctrl-C). A process that dies first, a world that does not finish within the wall limit, or a
 result marked partial makes the run *failed*: it is reported with the reason and the tail of
@@ -27,9 +27,9 @@ from typing import Any
 from swarmgen import pipeline
 from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import nodes_package
+from swarmgen.ros.domains import lease
 from swarmgen.sim.batch import Config
 from swarmgen.sim.detailed.bags import record_run
-from swarmgen.ros.domains import lease
 from swarmgen.sim.detailed.plan import Planner, RunPlan
 from swarmgen.sim.detailed.procs import ProcessGroup
 from swarmgen.sim.scenario import SimulationError
@@ -106,7 +106,7 @@ def run_one(
                  "--ros-args", "-p", "use_sim_time:=true",
                  "-p", "lockstep_topic:=/world/settle"]  # fmt: skip
         group.start("swarm", swarm, env, here)
-        run.failure = _await_members(group, plan.members, START_LIMIT_S, cancel)
+        run.failure = _await_members(group, START_LIMIT_S, cancel)
         if run.failure is None:
             group.start("world", [python, "-m", "swarmgen_library.world_node", "world.json"],
                         env, here)  # fmt: skip
@@ -120,10 +120,9 @@ def run_one(
     return run
 
 
-def _await_members(
-    group: ProcessGroup, members: int, limit: float, cancel: threading.Event
-) -> str | None:
-    """Wait until the swarm's `--trace` shows every member's initial configuration."""
+def _await_members(group: ProcessGroup, limit: float, cancel: threading.Event) -> str | None:
+    """Wait until the swarm waits for the world's first probe (`{"lockstep": "waiting"}`: its
+    members are connected to their servers, and start at the first probe)."""
     swarm = next(s for s in group.started if s.name == "swarm")
     deadline = time.monotonic() + limit
     while time.monotonic() < deadline:
@@ -136,7 +135,7 @@ def _await_members(
             lines = swarm.log.read_text(encoding="utf-8", errors="replace").splitlines()
         except OSError:
             lines = []
-        if sum(1 for line in lines if '"event": null' in line) >= members:
+        if any(line.startswith('{"lockstep": "waiting"') for line in lines):
             return None
         time.sleep(0.05)
     return f"the swarm did not start within {limit:g} s"

@@ -17,10 +17,13 @@ from __future__ import annotations
 
 import itertools
 import json
-from collections.abc import Iterator, Sequence
+import time
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from geometry_msgs.msg import PoseStamped, TwistStamped  # type: ignore[import-untyped,unused-ignore]
+from rclpy.clock import Clock
+from rclpy.clock_type import ClockType
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
@@ -38,6 +41,7 @@ from .tracking import TARGET_FOUND, TargetEvent, TargetMonitoring
 
 # Lockstep topics lose nothing: a lost pose or cmd_vel would stall the world for a timeout.
 QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+JOIN_POLL_S = 0.02  # how often the servers look whether every client is matched
 EVENTS_QOS = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # as the members'
 
 
@@ -102,8 +106,6 @@ class Swarm(Node):
         self._ids: dict[str, Iterator[int]] = {}
         self._settle = self.create_publisher(String, "/world/settle", QOS)
         self.counters = Counters(config.name, lambda text: self._settle.publish(String(data=text)))
-        self.create_subscription(String, "/world/settle/probe",
-                                 lambda m: self.counters.probe(m.data), QOS)  # fmt: skip
         me = self.get_fully_qualified_name()
         self._heard = (f"{config.event_topic}@{me}", f"{config.auction_topic}@{me}")
         self.counters.listen(self._heard[1])
@@ -116,6 +118,30 @@ class Swarm(Node):
                 self.event_type, config.event_topic, self._heard_event, EVENTS_QOS
             )
             self.counters.listen(self._heard[0])
+
+    def join_barrier(self, timeout_s: float, joined: Callable[[bool], None]) -> None:
+        """Subscribe to the world's probes once every service of every member has a client
+        (or after `timeout_s` wall seconds; `joined(False)` then). *Why:* Fast DDS drops a
+        response whose client's response reader the server has not matched yet ("client will
+        not receive response"), and under load that match can lag the client's own view that
+        the server is up by more than its 100 ms grace: a goal sent then is accepted, but its
+        answer is lost. The world starts stepping only when every reporter has subscribed,
+        and the generated swarm sends nothing before the world's first probe, so no request
+        reaches a server that cannot answer it."""
+        deadline = time.monotonic() + timeout_s
+        steady = Clock(clock_type=ClockType.STEADY_TIME)  # wall time: /clock has not started
+
+        def poll() -> None:
+            matched = all(
+                m.count_clients(name) > 0 for m in self.members.values() for name in m.served
+            )
+            if matched or time.monotonic() > deadline:
+                timer.cancel()
+                self.create_subscription(String, "/world/settle/probe",
+                                         lambda m: self.counters.probe(m.data), QOS)  # fmt: skip
+                joined(matched)
+
+        timer = self.create_timer(JOIN_POLL_S, poll, clock=steady)
 
     def settle(self) -> None:
         """Something a member reacts to happened: the next step report asks the world to
@@ -239,6 +265,7 @@ class MemberNode(Node):
         self.t = 0.0
         self.activities: list[Activity] = []
         self.monitor: TargetMonitoring | None = None
+        self.served: list[str] = []  # its services' names (an action's: its send_goal service)
         self.found_publisher: tuple[Any, Any] | None = None  # (publisher, message type)
         self.last_target: int | None = None
         self._poses: dict[int, tuple[Pose, Any]] = {}  # per step: the pose and its stamp

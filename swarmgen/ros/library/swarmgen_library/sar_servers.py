@@ -377,6 +377,7 @@ def _action(member: MemberNode, cfg: BehaviourConfig, kind: Any, factory: Factor
 
     ActionServer(member, kind, cfg.ros_name, execute,
                  goal_callback=accept, cancel_callback=cancel)  # fmt: skip
+    member.served.append(f"{member.resolve_service_name(cfg.ros_name)}/_action/send_goal")
 
 
 def _service(member: MemberNode, cfg: BehaviourConfig, kind: Any, factory: Factory) -> None:
@@ -395,3 +396,4 @@ def _service(member: MemberNode, cfg: BehaviourConfig, kind: Any, factory: Facto
         return response
 
     member.create_service(kind, cfg.ros_name, call)
+    member.served.append(member.resolve_service_name(cfg.ros_name))

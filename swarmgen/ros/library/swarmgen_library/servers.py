@@ -40,6 +40,7 @@ def serve(config: ServersConfig) -> int:
         for node in nodes:
             executor.add_node(node)
         print(json.dumps({"event": "ready", "members": list(swarm.members)}), flush=True)
+        swarm.join_barrier(config.clients_timeout_s, lambda matched: _joined(swarm, matched))
         executor.spin()
     except ConfigError as err:
         print(f"servers: {err}", file=sys.stderr)
@@ -52,6 +53,13 @@ def serve(config: ServersConfig) -> int:
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _joined(swarm: Swarm, matched: bool) -> None:
+    """The servers take part in the world's steps from now on."""
+    if not matched:
+        swarm.get_logger().warning("not every behaviour server has its client yet: joining anyway")
+    print(json.dumps({"event": "joined", "matched": matched}), flush=True)
 
 
 def main(argv: Sequence[str] | None = None) -> int:

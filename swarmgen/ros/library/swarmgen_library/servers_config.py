@@ -81,6 +81,7 @@ class ServersConfig:
     members: tuple[MemberConfig, ...]
     params: dict[str, float] = field(default_factory=dict)
     name: str = "servers"
+    clients_timeout_s: float = 15.0  # wall seconds to wait for every server's client
 
 
 def _number(where: str, value: Any) -> float:
@@ -172,6 +173,7 @@ def parse(raw: Any) -> ServersConfig:
         members=members,
         params=params,
         name=str(raw.get("name") or f"servers_{members[0].namespace}"),
+        clients_timeout_s=_number("clients_timeout_s", raw.get("clients_timeout_s", 15.0)),
     )
 
 
