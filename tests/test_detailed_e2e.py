@@ -99,6 +99,16 @@ def test_two_detailed_runs_are_identical_to_the_step(tmp_path: Path) -> None:
     runs = [_results(tmp_path, n)["runs"][0] for n in ("r1", "r2")]
     for key in ("end_tick", "reason", "found", "rescued"):
         assert runs[0][key] == runs[1][key], (key, runs)
+    # the exact start: the servers joined with every client matched, the swarm waited for the
+    # world's first probe before it started (nothing was sent before the world stepped)
+    for name in ("r1", "r2"):
+        [logs] = (tmp_path / f"{name}-runs").glob("run-*/logs")
+        servers = (logs / "servers.log").read_text(encoding="utf-8")
+        swarm = (logs / "swarm.log").read_text(encoding="utf-8").splitlines()
+        assert '{"event": "joined", "matched": true}' in servers
+        waiting = next(i for i, line in enumerate(swarm) if line.startswith('{"lockstep"'))
+        first_state = next(i for i, line in enumerate(swarm) if line.startswith('{"t"'))
+        assert waiting < first_state, swarm[:5]
     assert _leftovers(tmp_path) == []
 
 
