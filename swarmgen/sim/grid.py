@@ -72,20 +72,19 @@ def distinct(index: I64, stamp: NDArray[np.int32]) -> I64:
 @dataclass(frozen=True)
 class Points:
     """Patches passed in one round, piece by piece (a piece is a straight stretch of one
-    member): per point its steps from the segment's origin and its flat patch index (run
-    included); the points of piece i start at `first[i]`."""
+    member): per point the tick it is passed and its flat patch index (run included); the
+    points of piece i start at `first[i]`."""
 
     gm: I64  # member of each piece
-    s0: I64  # segment origin tick of each piece
     first: I64  # index of each piece's first point
-    steps: I64
+    tick: I64
     flat: I64
 
     @staticmethod
     def empty() -> Points:
         """No points."""
         e = np.zeros(0, dtype=np.int64)
-        return Points(e, e, e, e, e)
+        return Points(e, e, e, e)
 
     def __len__(self) -> int:
         return len(self.flat)
@@ -96,7 +95,7 @@ class Points:
 
     def ticks(self, at: I64) -> I64:
         """The tick at which each point `at` is passed."""
-        return self.steps[at] + self.s0[self.piece(at)]
+        return self.tick[at]
 
     def members(self, at: I64) -> I64:
         """The member passing each point `at`."""
@@ -104,9 +103,7 @@ class Points:
 
     def until(self, end: I64, cells: int) -> Points:
         """The points at or before each run's end tick (pieces become one per point)."""
-        every = np.arange(len(self.flat))
-        keep = np.flatnonzero(self.ticks(every) <= end[self.flat // cells])
-        piece = self.piece(keep)
+        keep = np.flatnonzero(self.tick <= end[self.flat // cells])
         return Points(
-            self.gm[piece], self.s0[piece], np.arange(len(keep)), self.steps[keep], self.flat[keep]
+            self.gm[self.piece(keep)], np.arange(len(keep)), self.tick[keep], self.flat[keep]
         )

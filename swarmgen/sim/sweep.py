@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from swarmgen.sim.batch import Batch, Config, RunResult
-from swarmgen.sim.machines import Machines
+from swarmgen.sim.machines import Machines, build_chart
 from swarmgen.sim.scenario import Scenario, SimulationError
 
 
@@ -107,6 +107,8 @@ def simulate(
                 progress(done, total)
     else:
         methods = multiprocessing.get_all_start_methods()
+        for machine in machines.members:  # built once here: forked workers inherit the charts
+            build_chart(machine)
         context = multiprocessing.get_context("fork" if "fork" in methods else None)
         with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
             futures = {

@@ -21,7 +21,9 @@ numbers however runs are batched or spread over processes.
 Coverage is recorded as times: `first[c]` is the first tick a covering member stood on patch c;
 when each patch was first *seen* is the minimum of `first` over the view around it
 (`seen_times`), so coverage times to any percentage are order statistics. During the run only
-the count of patches seen is kept up to date (`covered`), for the stop condition.
+the count of patches seen is kept up to date (`covered`), for the stop condition. Stretches of a
+leg whose view holds no unseen patch and no target are skipped without computing their positions
+(`swarmgen.sim.blocks`): they cannot change a number.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from swarmgen.sim.blocks import STRETCH, Blocks, padded_index
 from swarmgen.sim.grid import (
     BLOCK,
     F64,
@@ -72,6 +75,7 @@ class World:
         self.per_run = per_run = len(start_x)
         self.run_of: I64 = np.repeat(np.arange(runs, dtype=np.int64), per_run)
         self._init_bodies(run_keys, start_x, start_y, headings)
+        self.blocks = Blocks(runs, geo)  # before the targets: their views mark blocks
         self._init_coverage()
         self._init_targets(targets)
 
@@ -113,11 +117,11 @@ class World:
         seen[:, self.v : self.v + self.H, self.v : self.v + self.W] = 0
         self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
         self.covered: I64 = np.zeros(runs, dtype=np.int64)
-        self._stamp_first: NDArray[np.int32] = np.zeros(runs * self.WH, dtype=np.int32)
         self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
         side = 2 * self.v + 1
         oy_, ox_ = np.divmod(np.arange(side * side, dtype=np.int64), side)
-        self._view_offsets: I64 = (oy_ - self.v) * self.PW + (ox_ - self.v)
+        self._padded = padded_index(runs, self.geometry)
+        self._view_offsets = ((oy_ - self.v) * self.PW + (ox_ - self.v)).astype(self._padded.dtype)
 
     def _init_targets(self, targets: I64) -> None:
         """Where the targets are, their status and the ticks of what happened to them."""
@@ -203,7 +207,7 @@ class World:
         ix, iy = int(self.ox[member]), int(self.oy[member])
         flat = np.array([int(self.run_of[member]) * self.WH + iy * self.W + ix])
         zero = np.zeros(1, dtype=np.int64)
-        self._commit(Points(g, np.array([tick], dtype=np.int64), zero, zero, flat))
+        self._commit(Points(g, zero, np.array([tick], dtype=np.int64), flat))
         if self.detects(member):
             return self.targets_in_view(member, ix, iy)
         return []
@@ -278,15 +282,45 @@ class World:
         if not ints:
             return Points.empty()
         gm, start, n, s0 = (np.concatenate([p[i] for p in ints]) for i in range(4))
-        body = np.concatenate(floats)
-        ox, oy, dx, dy = body[:, 0], body[:, 1], body[:, 2], body[:, 3]
+        return self._expand(gm, start - s0 + 1, n, s0, np.concatenate(floats))
+
+    def _expand(self, gm: I64, a: I64, n: I64, s0: I64, body: F64) -> Points:
+        """The patches of pieces (member, first step `a` from the segment origin, `n` steps,
+        origin tick, body row), cut into stretches of `STRETCH` steps; a stretch whose view
+        meets no dirty block (`Blocks`) is left out, as nothing it passes can change."""
+        m = -(-n // STRETCH)
+        piece = np.repeat(np.arange(len(n)), m)
+        j = np.arange(len(piece), dtype=np.int64) - np.repeat(np.cumsum(m) - m, m)
+        sa = a[piece] + j * STRETCH
+        cnt = np.minimum(STRETCH, n[piece] - j * STRETCH)
+        ends = []
+        for steps in (sa, sa + cnt - 1):  # the stretch's first and last position
+            st = steps.astype(np.float64)
+            ends.append(
+                (
+                    (st * body[piece, 2] + body[piece, 0]).astype(np.int64),
+                    (st * body[piece, 3] + body[piece, 1]).astype(np.int64),
+                )
+            )
+        (xa, ya), (xb, yb) = ends
+        keep = self.blocks.touches(
+            self.run_of[gm[piece]],
+            np.minimum(xa, xb),
+            np.maximum(xa, xb),
+            np.minimum(ya, yb),
+            np.maximum(ya, yb),
+        )
+        piece, sa, n = piece[keep], sa[keep], cnt[keep]
         total = int(n.sum())
         if not total:
             return Points.empty()
+        gm, s0, body = gm[piece], s0[piece], body[piece]
+        ox, oy, dx, dy = body[:, 0], body[:, 1], body[:, 2], body[:, 3]
         first = np.cumsum(n) - n
-        # steps from the segment origin: (cur - s0) + 1 .. (cur - s0) + n
-        steps_i = np.arange(1, total + 1, dtype=np.int64)
-        steps_i += np.repeat(start - s0 - first, n)
+        # steps from the segment origin: sa .. sa + n - 1 per stretch
+        steps_i = np.arange(total, dtype=np.int64)
+        steps_i += np.repeat(sa - first, n)
+        tick = steps_i + np.repeat(s0, n)
         steps = steps_i.astype(np.float64)
         u = steps * np.repeat(dx, n)
         u += np.repeat(ox, n)
@@ -296,8 +330,7 @@ class World:
         flat *= self.W
         flat += u.astype(np.int64)
         flat += np.repeat(self.run_of[gm] * self.WH, n)
-        nonempty = n > 0  # pieces without points would share a first index
-        return Points(gm[nonempty], s0[nonempty], first[nonempty], steps_i, flat)
+        return Points(gm, first, tick, flat)
 
     def _snapshot(self, g: I64) -> list[NDArray[np.generic]]:
         return [a[g].copy() for a in self._state()]
@@ -359,24 +392,26 @@ class World:
         if not new.size:
             return
         flat = points.flat[new]
-        np.minimum.at(self.first, flat, points.ticks(new).astype(np.int32))
-        centres = distinct(flat, self._stamp_first)
-        self.stood[centres] = 1
-        run, rest = np.divmod(centres, self.WH)
-        y, x = np.divmod(rest, self.W)
-        padded = (run * self.PH + y + self.v) * self.PW + x + self.v
+        np.minimum.at(self.first, flat, points.tick[new].astype(np.int32))
+        # a patch passed twice brings the same view: `distinct` below drops the repeats
+        self.stood[flat] = 1
+        padded = self._padded[flat]
         around = (padded[:, None] + self._view_offsets[None, :]).reshape(-1)
         around = around[self.seen_flag[around] == 0]
         fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh] = 1
         self.covered += np.bincount(fresh // self.PWH, minlength=self.runs)
+        self.blocks.seen(fresh)
 
     def _near_add(self, run: int, target: int, delta: int) -> None:
         v = self.v
         x, y = int(self.tx[run, target]), int(self.ty[run, target])
         grid = self.near.reshape(self.runs, self.H, self.W)
         rows = slice(max(0, y - v), min(self.H, y + v + 1))
-        grid[run, rows, max(0, x - v) : min(self.W, x + v + 1)] += delta
+        cols = slice(max(0, x - v), min(self.W, x + v + 1))
+        grid[run, rows, cols] += delta
+        ys, xs = np.mgrid[rows, cols]
+        self.blocks.change(self.blocks.block_of(run, xs.ravel(), ys.ravel()), delta)
 
     def targets_in_view(self, member: int, ix: int, iy: int) -> list[int]:
         """The unfound targets of the member's run within view of patch (ix, iy)."""

@@ -1,0 +1,99 @@
+"""Where a round's movement can still change something: a coarse index over the grid.
+
+Late in a coverage run almost every patch a member passes has been seen, with every patch of
+its view, and has no unfound target in view; passing it changes no result (a patch's seen time
+is the minimum of its view's first-stood ticks, and every patch of that view was seen earlier).
+`Blocks` keeps, per run and per `SIZE` x `SIZE` block of patches, how many patches are still
+unseen and how many target views overlap it. A straight stretch of a member's leg whose view
+touches only clean blocks is skipped whole: its positions are never computed.
+
+The index is conservative (a dirty block may hold nothing the stretch passes), so skipping
+never changes a number; it only saves the work of patches that cannot matter.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from swarmgen.sim.grid import I64, Geometry
+
+SIZE = 8  # patches per block side
+STRETCH = 16  # steps per stretch tested against the index
+
+
+class Blocks:
+    """Per run and block: unseen patches plus target-view overlaps (zero: nothing to do)."""
+
+    def __init__(self, runs: int, geometry: Geometry) -> None:
+        """Every patch of every run starts unseen; no target yet."""
+        self.W, self.H, self.v = geometry.width, geometry.height, geometry.view
+        self.runs = runs
+        self.bw = -(-self.W // SIZE)
+        self.bh = -(-self.H // SIZE)
+        xs = np.bincount(np.arange(self.W) // SIZE, minlength=self.bw)
+        ys = np.bincount(np.arange(self.H) // SIZE, minlength=self.bh)
+        per_run = (ys[:, None] * xs[None, :]).astype(np.int64).reshape(-1)
+        self.dirty: I64 = np.tile(per_run, runs)  # (runs * bh * bw,)
+        self._table: NDArray[np.int64] | None = None
+        # the block of each padded patch (the padding takes its nearest patch's): one look-up
+        # per newly seen patch instead of two divisions
+        ph, pw = self.H + 2 * self.v, self.W + 2 * self.v
+        dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
+        by = np.clip(np.arange(ph) - self.v, 0, self.H - 1) // SIZE
+        bx = np.clip(np.arange(pw) - self.v, 0, self.W - 1) // SIZE
+        lut = ((np.arange(runs)[:, None] * self.bh + by[None, :]) * self.bw).astype(dtype)
+        self.of_padded: NDArray[np.signedinteger] = np.add(
+            lut[:, :, None], bx.astype(dtype)[None, None, :]
+        ).ravel()
+
+    def block_of(self, run: I64 | int, x: I64, y: I64) -> I64:
+        """The flat block index of patches (x, y) of runs `run`."""
+        block: I64 = (run * self.bh + y // SIZE) * self.bw + x // SIZE
+        return block
+
+    def seen(self, padded: I64) -> None:
+        """Padded patches (flat, run included) were seen for the first time."""
+        self.change(self.of_padded[padded], -1)
+
+    def change(self, blocks: NDArray[np.signedinteger], delta: int) -> None:
+        """Add `delta` to the count of each block listed (a block may repeat)."""
+        if blocks.size:
+            np.add.at(self.dirty, blocks, delta)
+            self._table = None
+
+    def table(self) -> NDArray[np.int64]:
+        """Summed-area table of the dirty blocks, (runs, bh + 1, bw + 1), first row and column 0."""
+        if self._table is None:
+            flags = (self.dirty > 0).reshape(self.runs, self.bh, self.bw)
+            table = np.zeros((self.runs, self.bh + 1, self.bw + 1), dtype=np.int64)
+            np.cumsum(np.cumsum(flags, axis=1), axis=2, out=table[:, 1:, 1:])
+            self._table = table
+        return self._table
+
+    def touches(self, run: I64, x0: I64, x1: I64, y0: I64, y1: I64) -> NDArray[np.bool_]:
+        """Whether the view from the patch rectangle [x0, x1] x [y0, y1] (in the grid) meets a
+        dirty block of the run."""
+        v = self.v
+        bx0 = np.maximum(x0 - v, 0) // SIZE
+        bx1 = np.minimum(x1 + v, self.W - 1) // SIZE + 1
+        by0 = np.maximum(y0 - v, 0) // SIZE
+        by1 = np.minimum(y1 + v, self.H - 1) // SIZE + 1
+        t = self.table().reshape(-1)
+        base = run * ((self.bh + 1) * (self.bw + 1))
+        row0, row1 = base + by0 * (self.bw + 1), base + by1 * (self.bw + 1)
+        total = t[row1 + bx1] - t[row0 + bx1] - t[row1 + bx0] + t[row0 + bx0]
+        touched: NDArray[np.bool_] = total > 0
+        return touched
+
+
+def padded_index(runs: int, geometry: Geometry) -> NDArray[np.signedinteger]:
+    """For each patch (flat, run included) its flat index in the grid padded by `view`."""
+    v, w, h = geometry.view, geometry.width, geometry.height
+    ph, pw = h + 2 * v, w + 2 * v
+    dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
+    rows = ((np.arange(runs)[:, None] * ph + np.arange(h)[None, :] + v) * pw + v).astype(dtype)
+    index: NDArray[np.signedinteger] = np.add(
+        rows[:, :, None], np.arange(w, dtype=dtype)[None, None, :]
+    )
+    return index.ravel()
