@@ -3,7 +3,10 @@
     .venv/bin/python benchmarks/bench_startup.py [--reps 15] [--base /tmp/base]
 
 Commands: `--version`, `--help`, `validate --help`, `compile --help`, `validate` SAR,
-`compile` SAR `--backend scxml`, `compile` SAR with every backend. Each runs as a subprocess
+`compile` SAR `--backend scxml`, `compile` SAR with every backend, and `validate` on synthetic
+models of 1,000, 3,000 and 10,000 states (benchmarks/synth_model.py, generated once per run into
+the scratch directory; `--cases` runs a subset, e.g. `--cases validate_sar,validate_synth_10k`;
+the JSON's `validate_growth` gives their median seconds per 1,000 states). Each runs as a subprocess
 through the console script (`.venv/bin/swarmgen`), interpreter start included, output into a
 fresh temporary directory.
 
@@ -51,6 +54,14 @@ SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 RESULTS = HERE / "results" / "startup.json"
 GNU_TIME = Path("/usr/bin/time")
 OUT = "{out}"  # replaced by a fresh output directory per run
+SYNTH_SIZES = (1000, 3000, 10000)  # states of the synthetic models `validate` is timed on
+
+
+def synth(states: int) -> str:
+    """The placeholder of the synthetic model of `states` states (see `synth_path`)."""
+    return f"{{synth:{states}}}"
+
+
 CASES: dict[str, list[str]] = {
     "version": ["--version"],
     "help": ["--help"],
@@ -59,6 +70,7 @@ CASES: dict[str, list[str]] = {
     "validate_sar": ["validate", str(SAR)],
     "compile_sar_scxml": ["compile", str(SAR), "-o", OUT, "--backend", "scxml"],
     "compile_sar_all": ["compile", str(SAR), "-o", OUT],
+    **{f"validate_synth_{n // 1000}k": ["validate", synth(n)] for n in SYNTH_SIZES},
 }
 TARGETS_S = {  # issue 14
     "version": 0.080,
@@ -67,6 +79,7 @@ TARGETS_S = {  # issue 14
     "compile_help": 0.080,
     "validate_sar": 0.200,
     "compile_sar_all": 0.300,
+    "validate_synth_10k": 2.0,  # the aim of issue 14's validate part (every backend: < 5 s)
 }
 MODES = ("cached", "source")
 
@@ -89,9 +102,26 @@ def environment(tree: Path, mode: str, pycache: Path) -> dict[str, str]:
     return env
 
 
+def synth_path(scratch: Path, states: int) -> Path:
+    """Where the synthetic model of `states` states lives in this run's scratch directory."""
+    return scratch / "synth" / f"synth_{states}.xmi"
+
+
+def make_synth(scratch: Path) -> None:
+    """Generate the synthetic models once (the same bytes for the same size)."""
+    for states in SYNTH_SIZES:
+        target = synth_path(scratch, states)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        generator = [sys.executable, str(HERE / "synth_model.py"), "--states", str(states)]
+        subprocess.run([*generator, "-o", str(target)], check=True, capture_output=True)
+
+
 def command(case: str, out: Path) -> list[str]:
-    """The command line of `case`, writing (if it writes) into `out`."""
-    return [*script(), *(str(out) if a == OUT else a for a in CASES[case])]
+    """The command line of `case`, writing (if it writes) into `out`; a synthetic model's
+    placeholder becomes its path in the scratch directory (`out`'s grandparent)."""
+    scratch = out.parent.parent
+    placeholders = {OUT: str(out)} | {synth(n): str(synth_path(scratch, n)) for n in SYNTH_SIZES}
+    return [*script(), *(placeholders.get(a, a) for a in CASES[case])]
 
 
 def cpu_of_children() -> float:
@@ -186,16 +216,19 @@ def summary(samples: list[tuple[float, float]]) -> dict[str, Any]:
     }
 
 
-def measure(trees: dict[str, Path], reps: int, scratch: Path) -> dict[str, Any]:
+def measure(trees: dict[str, Path], reps: int, scratch: Path, cases: list[str]) -> dict[str, Any]:
     """Every case, tree and mode, interleaved rep by rep; then one peak-memory run of each."""
     pycache = scratch / "pycache"
+    if any(CASES[case][-1].startswith("{synth:") for case in cases):
+        make_synth(scratch)
     envs = {(t, m): environment(p, m, pycache) for t, p in trees.items() for m in MODES}
+    warm_up = "compile_sar_all" if "compile_sar_all" in cases else cases[0]
     for (tree, _), env in envs.items():
         origin(trees[tree], env, scratch)
-        run_once("compile_sar_all", env, scratch)  # warm-up: the disk cache, the .pyc (cached)
+        run_once(warm_up, env, scratch)  # warm-up: the disk cache, the .pyc (cached)
     samples: dict[tuple[str, str, str], list[tuple[float, float]]] = {}
     for rep in range(reps):
-        for case in CASES:
+        for case in cases:
             for (tree, mode), env in envs.items():
                 samples.setdefault((case, tree, mode), []).append(run_once(case, env, scratch))
         print(f"  rep {rep + 1}/{reps}", file=sys.stderr)
@@ -223,6 +256,25 @@ def ratios(results: dict[str, Any], trees: dict[str, Path]) -> None:
                 for tree in trees
                 if tree != "base"
             }
+
+
+def growth(results: dict[str, Any], trees: dict[str, Path]) -> dict[str, Any]:
+    """Per mode and tree, the median wall and CPU seconds of `validate` per 1,000 states of
+    each synthetic model measured (linear growth: the same figure at every size)."""
+    found: dict[str, Any] = {}
+    for mode, by_case in results.items():
+        for tree in trees:
+            rows = {}
+            for states in SYNTH_SIZES:
+                entry = by_case.get(f"validate_synth_{states // 1000}k", {}).get(tree)
+                if entry is not None:
+                    rows[str(states)] = {
+                        "wall_s_per_1k_states": round(entry["median_s"] * 1000 / states, 4),
+                        "cpu_s_per_1k_states": round(entry["cpu_median_s"] * 1000 / states, 4),
+                    }
+            if rows:
+                found.setdefault(mode, {})[tree] = rows
+    return found
 
 
 def table(results: dict[str, Any], trees: dict[str, Path]) -> str:
@@ -260,7 +312,14 @@ def main() -> None:
         help="leave out this checkout (e.g. while others edit it); needs --base or --tree",
     )
     parser.add_argument("--output", type=Path, default=RESULTS, help="the JSON written")
+    parser.add_argument(
+        "--cases", help=f"comma-separated cases to run (default: all of {', '.join(CASES)})"
+    )
     args = parser.parse_args()
+    cases = args.cases.split(",") if args.cases else list(CASES)
+    unknown = [case for case in cases if case not in CASES]
+    if unknown:
+        parser.error(f"unknown case(s): {', '.join(unknown)}")
     trees = {"base": args.base.resolve()} if args.base is not None else {}
     for item in args.tree:
         name, _, path = item.partition("=")
@@ -271,7 +330,7 @@ def main() -> None:
         parser.error("--without-current needs --base or --tree")
     load_start = os.getloadavg()
     with tempfile.TemporaryDirectory(prefix="swarmgen-bench-startup-") as scratch:
-        results = measure(trees, args.reps, Path(scratch))
+        results = measure(trees, args.reps, Path(scratch), cases)
     ratios(results, trees)
     last = list(trees)[-1]  # the tree the targets are checked on: this checkout, else the last
     cached = results["cached"]
@@ -284,12 +343,15 @@ def main() -> None:
             "peak_memory_from": "/usr/bin/time -v" if GNU_TIME.is_file() else None,
         },
         "trees": {name: revision(path) for name, path in trees.items()},
-        "cases": {name: case for name, case in CASES.items()},
+        "cases": {name: case for name, case in CASES.items() if name in cases},
         "targets_s": TARGETS_S,
         "targets_checked_on": last,
         "targets_met_cached": {
-            case: cached[case][last]["median_s"] < limit for case, limit in TARGETS_S.items()
+            case: cached[case][last]["median_s"] < limit
+            for case, limit in TARGETS_S.items()
+            if case in cached
         },
+        "validate_growth": growth(results, trees),
         "results": results,
     }
     args.output.parent.mkdir(parents=True, exist_ok=True)

@@ -11,6 +11,7 @@ import codecs
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import cast
 
 from lxml import etree
 
@@ -53,6 +54,9 @@ _DEFAULT_TYPES = {
 _SKIPPED = {"Extension", "Documentation"}
 
 
+_PLAIN, _XMI_TYPE, _XMI_ID, _OTHER = range(4)  # the roles of an attribute name (_Context.role)
+
+
 @dataclass
 class _Context:
     file: str
@@ -62,6 +66,32 @@ class _Context:
     line_cursor: dict[int, int]
     count: int = 0
     stereotype_ids: dict[str, Span] = field(default_factory=dict)
+    # `{uri}local` -> (uri, local), split once per distinct name: a 10,000-state model has
+    # ~80,000 elements but a few dozen tag and attribute names (etree.QName per use was a third
+    # of the load time).
+    names: dict[str, tuple[str | None, str]] = field(default_factory=dict)
+    roles: dict[str, tuple[int, str]] = field(default_factory=dict)  # see `role`
+
+    def split(self, name: str) -> tuple[str | None, str]:
+        """The namespace URI (None without one) and the local name of a tag or attribute."""
+        found = self.names.get(name)
+        if found is None:
+            qname = etree.QName(name)
+            found = self.names[name] = (qname.namespace, qname.localname)
+        return found
+
+    def role(self, key: str) -> tuple[int, str]:
+        """What an attribute name is to an element (`_PLAIN` with its local name, `_XMI_TYPE`,
+        `_XMI_ID`, or `_OTHER`: another namespace's, ignored), decided once per name."""
+        namespace, local = self.split(key)
+        if namespace is None:
+            role = (_PLAIN, local)
+        elif _is_xmi_uri(namespace) and local in ("type", "id"):
+            role = (_XMI_TYPE if local == "type" else _XMI_ID, local)
+        else:
+            role = (_OTHER, local)
+        self.roles[key] = role
+        return role
 
 
 class InputError(Exception):
@@ -293,10 +323,11 @@ def _convert(
         xml_node, raw, level = stack.pop()
         pending: list[tuple[etree._Element, RawElement, int]] = []
         for child in xml_node.iterchildren(tag=etree.Element):
-            if etree.QName(child).localname in _SKIPPED:
+            local = ctx.split(child.tag)[1]
+            if local in _SKIPPED:
                 continue
-            if _is_reference(child):
-                raw.child_refs.setdefault(etree.QName(child).localname, []).append(_ref_of(child))
+            if _is_reference(child, ctx):
+                raw.child_refs.setdefault(local, []).append(_ref_of(child))
                 continue
             kid = _make_element(child, raw, raw.path, ctx, level + 1)
             raw.children.append(kid)
@@ -315,24 +346,23 @@ def _make_element(
         if depth > MAX_DEPTH:
             raise InputError(dg.TOO_LARGE.at(span, "depth", limit=MAX_DEPTH))
         raise InputError(dg.TOO_LARGE.at(span, "elements", limit=MAX_ELEMENTS))
-    qname = etree.QName(node)
+    namespace, feature = ctx.split(node.tag)
     attrs: dict[str, str] = {}
     xmi_type = xmi_id = ""
+    roles = ctx.roles
     for key, value in _attributes(node, ctx, line):
-        aq = etree.QName(key)
-        if aq.namespace is None:
-            attrs[aq.localname] = str(value)
-        elif _is_xmi_uri(aq.namespace):
-            if aq.localname == "type":
-                xmi_type = str(value)
-            elif aq.localname == "id":
-                xmi_id = str(value)
-    feature = qname.localname
-    uml_type = _infer_type(feature, xmi_type, qname.namespace or "", attrs)
+        role = roles.get(key) or ctx.role(key)
+        if role[0] == _PLAIN:
+            attrs[role[1]] = value
+        elif role[0] == _XMI_TYPE:
+            xmi_type = value
+        elif role[0] == _XMI_ID:
+            xmi_id = value
+    uml_type = _infer_type(feature, xmi_type, namespace or "", attrs)
     name = attrs.get("name", "")
     path = f"{parent_path}::{name}" if parent_path and name else (name or parent_path)
     text = (node.text or "").strip() if len(node) == 0 else ""
-    column = _column(node, line, ctx)
+    column = _column(node, line, ctx, feature)
     element = RawElement(
         feature, uml_type, xmi_id or None, attrs, ctx.file, line, column, path, text
     )
@@ -345,7 +375,8 @@ def _make_element(
 def _attributes(node: etree._Element, ctx: _Context, line: int) -> list[tuple[str, str]]:
     """The element's attributes, refused past MAX_ATTRIBUTES before any value is read (counting
     them is linear, reading them is not)."""
-    count = len(node.attrib)
+    attrib = node.attrib
+    count = len(attrib)
     if count > MAX_ATTRIBUTES:
         raise InputError(
             dg.TOO_LARGE.at(
@@ -356,7 +387,8 @@ def _attributes(node: etree._Element, ctx: _Context, line: int) -> list[tuple[st
                 limit=MAX_ATTRIBUTES,
             )
         )
-    return [(str(k), str(v)) for k, v in node.attrib.items()]
+    # lxml's keys and values are str (its stubs also allow bytes): no copies per value.
+    return cast(list[tuple[str, str]], attrib.items())
 
 
 def _infer_type(feature: str, xmi_type: str, uri: str, attrs: dict[str, str]) -> str:
@@ -374,15 +406,15 @@ def _line(node: etree._Element) -> int:
     return value if isinstance(value, int) else 0
 
 
-def _column(node: etree._Element, line: int, ctx: _Context) -> int:
-    """lxml gives no columns: find the tag's `<` on its line, left to right across elements."""
+def _column(node: etree._Element, line: int, ctx: _Context, local: str | None = None) -> int:
+    """lxml gives no columns: find the tag's `<` on its line, left to right across elements.
+    `local` is the element's local name when the caller has it already."""
     if not 0 < line <= len(ctx.lines):
         return 1
     text = ctx.lines[line - 1]
     prefix = node.prefix
-    tag = (
-        f"<{prefix}:{etree.QName(node).localname}" if prefix else f"<{etree.QName(node).localname}"
-    )
+    local = ctx.split(node.tag)[1] if local is None else local
+    tag = f"<{prefix}:{local}" if prefix else f"<{local}"
     at = text.find(tag, ctx.line_cursor.get(line, 0))
     if at < 0:
         return 1
@@ -400,12 +432,14 @@ def _register(element: RawElement, ctx: _Context) -> None:
     ctx.diagnostics.append(dg.DUPLICATE_ID.at(element.span, notes=[note], id=element.id))
 
 
-def _is_reference(node: etree._Element) -> bool:
+def _is_reference(node: etree._Element, ctx: _Context) -> bool:
     """`<type href="..."/>` or `<memberEnd xmi:idref="..."/>`: a reference, not an element."""
     if len(node):
         return False
-    keys = {etree.QName(k).localname for k in node.attrib}
-    return "href" in keys or "idref" in keys
+    return any(ctx.split(str(k))[1] in _REFERENCE_KEYS for k in node.attrib)
+
+
+_REFERENCE_KEYS = frozenset({"href", "idref"})
 
 
 def _ref_of(node: etree._Element) -> str:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
@@ -55,6 +56,12 @@ class Builder:
     events_by_signal: dict[str, Event] = field(default_factory=dict)
     events_by_name: dict[str, Event] = field(default_factory=dict)
     enumerations: dict[str, Enumeration] = field(default_factory=dict)  # by name
+
+    @cached_property
+    def declares_events(self) -> bool:
+        """Whether the model applies «SwarmEvent» anywhere (then an unknown trigger name is an
+        error); once per build, not a scan of every stereotype per trigger."""
+        return any(a.name == "SwarmEvent" for a in self.raw.stereotypes)
 
     # --- helpers
 

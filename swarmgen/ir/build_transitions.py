@@ -173,7 +173,7 @@ def _named_trigger(
     if not name:
         b.diags.append(dg.UNKNOWN_EVENT.at(element.span, "unnamed"))
         return None
-    if b.raw.stereotypes and any(a.name == "SwarmEvent" for a in b.raw.stereotypes):
+    if b.declares_events:
         b.diags.append(dg.UNKNOWN_EVENT.at(element.span, name=name))
         return None
     return Trigger(kind=TriggerKind.EVENT, name=name, span=element.span)

@@ -25,6 +25,7 @@ class Tok:
 
 
 _DIGITS = frozenset(string.digits)
+_ASCII_WORD = re.compile(r"[A-Za-z0-9_]*")  # matches everywhere, possibly empty
 _NUMBER = re.compile(r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 # Longest first. Java/C-isms (++, +=, ===, **) are tokens of their own so that the parser can
 # explain them instead of reporting a puzzling error one character later.
@@ -33,6 +34,12 @@ _OPERATORS = (
     "==", "!=", "<=", ">=", "&&", "||", "++", "--", "+=", "-=", "*=", "/=", "%=", "**", "//",
     "+", "-", "*", "/", "%", "<", ">", "(", ")", ",", ".", "=", "!", ";",
 )  # fmt: skip
+# The operators by first character, longest first: the same first match as scanning the whole
+# tuple, without trying thirty prefixes per operator token.
+_BY_FIRST: dict[str, tuple[str, ...]] = {}
+for _op in _OPERATORS:
+    _BY_FIRST.setdefault(_op[0], ())
+    _BY_FIRST[_op[0]] += (_op,)
 _SIMPLE_ESCAPES = {"\\": "\\", "'": "'", '"': '"', "n": "\n", "t": "\t", "r": "\r"}
 _HEX_ESCAPES = {"x": 2, "u": 4, "U": 8}
 _CHAR_HINTS = {
@@ -111,7 +118,11 @@ class Lexer:
 
     def word(self, start: int) -> int:
         """Read a name at `start` (refusing reserved `__` names); returns the next index."""
-        end = start + 1
+        # ASCII letters, digits and `_` in one regex step (for an ASCII character that is what
+        # continuing an identifier means); the loop takes any other character that continues one.
+        ascii_run = _ASCII_WORD.match(self.text, start + 1)
+        assert ascii_run is not None  # the pattern also matches the empty string
+        end = ascii_run.end()
         while end < len(self.text) and ("_" + self.text[end]).isidentifier():
             end += 1
         lexeme = self.text[start:end]
@@ -161,7 +172,7 @@ class Lexer:
 
     def operator(self, i: int) -> int:
         """Read an operator at `i` (tracking parentheses), or fail with a hint."""
-        for op in _OPERATORS:
+        for op in _BY_FIRST.get(self.text[i], ()):
             if self.text.startswith(op, i):
                 self.depth = self.depth + 1 if op == "(" else self.depth
                 self.depth = max(0, self.depth - 1) if op == ")" else self.depth

@@ -84,13 +84,15 @@ class _Parser:
         self.text = text
         self.statements = statements
         self.toks = Lexer(text, statements).run()
+        self.last = len(self.toks) - 1  # the eof token: peeking past it stays on it
         self.pos = 0
         self.nest = 0
 
     # token access
 
     def peek(self, ahead: int = 0) -> Tok:
-        return self.toks[min(self.pos + ahead, len(self.toks) - 1)]
+        at = self.pos + ahead
+        return self.toks[at] if at < self.last else self.toks[-1]
 
     def advance(self) -> Tok:
         tok = self.toks[self.pos]

@@ -221,16 +221,25 @@ def walk(expr: Expr) -> Iterator[Expr]:
         stack.extend(reversed(_children(node)))
 
 
+# The rewrites below return the node itself where nothing under it changes: the result is equal
+# either way, and most trees have nothing to rewrite (re-validating every node of every
+# expression was a fifth of the IR build at 10,000 states).
+
+
 def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
     """`event.<f>` read as the member datum `names[f]` instead (depth is bounded by the parser)."""
     if isinstance(expr, EventField) and expr.field in names:
         return Name(name=names[expr.field])
     if isinstance(expr, Attr):
-        return Attr(obj=replace_fields(expr.obj, names), name=expr.name)
+        obj = replace_fields(expr.obj, names)
+        return expr if obj is expr.obj else Attr(obj=obj, name=expr.name)
     if isinstance(expr, Unary):
-        return Unary(op=expr.op, operand=replace_fields(expr.operand, names))
+        operand = replace_fields(expr.operand, names)
+        return expr if operand is expr.operand else Unary(op=expr.op, operand=operand)
     if isinstance(expr, Binary):
         left, right = replace_fields(expr.left, names), replace_fields(expr.right, names)
+        if left is expr.left and right is expr.right:
+            return expr
         return Binary(op=expr.op, left=left, right=right)
     return expr
 
@@ -241,11 +250,15 @@ def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
     if isinstance(expr, Attr):
         if isinstance(expr.obj, Name) and expr.obj.name in enums:
             return Const(value=expr.name, enum=expr.obj.name)
-        return Attr(obj=resolve_enums(expr.obj, enums), name=expr.name)
+        obj = resolve_enums(expr.obj, enums)
+        return expr if obj is expr.obj else Attr(obj=obj, name=expr.name)
     if isinstance(expr, Unary):
-        return Unary(op=expr.op, operand=resolve_enums(expr.operand, enums))
+        operand = resolve_enums(expr.operand, enums)
+        return expr if operand is expr.operand else Unary(op=expr.op, operand=operand)
     if isinstance(expr, Binary):
         left, right = resolve_enums(expr.left, enums), resolve_enums(expr.right, enums)
+        if left is expr.left and right is expr.right:
+            return expr
         return Binary(op=expr.op, left=left, right=right)
     return expr
 
@@ -253,8 +266,12 @@ def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
 def resolve_action_enums(action: Action, enums: Collection[str]) -> Action:
     """An action with its enumeration literals resolved (`resolve_enums`)."""
     if isinstance(action, Assign):
-        return Assign(target=action.target, value=resolve_enums(action.value, enums))
-    args = tuple(Arg(name=a.name, value=resolve_enums(a.value, enums)) for a in action.args)
+        value = resolve_enums(action.value, enums)
+        return action if value is action.value else Assign(target=action.target, value=value)
+    values = [resolve_enums(a.value, enums) for a in action.args]
+    if all(v is a.value for v, a in zip(values, action.args, strict=True)):
+        return action
+    args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
     return type(action)(event=action.event, args=args)
 
 
