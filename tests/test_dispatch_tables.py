@@ -26,10 +26,14 @@ from swarmgen.runtime.chart import (
     record,
 )
 from swarmgen.runtime.configuration import (
+    Plan,
+    Step,
+    Tables,
     document_order,
     entry_set,
     exit_set,
     in_final,
+    make_plan,
     recorded_history,
     remove_conflicts,
 )
@@ -380,3 +384,81 @@ def _shape(value: Any) -> Any:
     if isinstance(value, list):
         return ("list", [_shape(v) for v in value])
     return type(value).__name__
+
+
+# --- the per-chart indexes and per-transition steps ------------------------------------------------
+
+NAME_PARTS = ("a", "b", "", "*", "ab")
+descriptors = st.lists(st.sampled_from(NAME_PARTS), min_size=1, max_size=3).map(".".join)
+
+
+@given(
+    events=st.lists(st.lists(descriptors, max_size=3), min_size=1, max_size=6),
+    names=st.lists(descriptors, max_size=10),
+)
+def test_reactors_and_matching_find_what_matches_finds(
+    events: list[list[str]], names: list[str]
+) -> None:
+    """The chart's descriptor index (`Tables.reactors`) and a node's token index (`matching`)
+    give, for any name, exactly the transitions `Transition.matches` accepts, in document order:
+    descriptors with dots, empty parts, `*` and `.*` in any place."""
+    b = ChartBuilder("names")
+    b.node("P", "state")
+    for number in range(len(events)):
+        b.node(f"S{number}", "state", "P")
+    b.initial("P", ("S0",))
+    b.initial(None, ("P",))
+    for number, descriptors_of in enumerate(events):
+        for owner in (f"S{number}", "P"):
+            b.transition(owner, tuple(descriptors_of), ("P",))
+    chart = b.build()
+    tables = Tables(chart.nodes.values())
+    for name in [*names, *(d for ds in events for d in ds), "unrelated"]:
+        expected = {}
+        for node in chart.nodes.values():
+            found = tuple(t for t in node.transitions if t.events and t.matches(name))
+            assert node.matching(name) == found
+            if found:
+                expected[node] = found
+        assert tables.reactors(name) == expected
+
+
+@settings(max_examples=80, deadline=None)
+@given(build=charts(), events=st.lists(st.sampled_from(EVENTS), max_size=30))
+def test_steps_plan_as_make_plan(build: Callable[[Log], Chart], events: list[str]) -> None:
+    """A transition's Step (domain and entry set computed once, where they read no history)
+    gives, from every configuration the engine reached and under the history it had there, the
+    plan `make_plan` computes anew; and the engine's plans there are those of `make_plan`."""
+    chart = build([])
+    engine = Engine(chart, NullHost())
+    engine.start()
+    transitions = [t for node in chart.nodes.values() for t in node.transitions]
+    for name in [*events, None]:
+        if name is not None:
+            engine.send(engine.make_event(name))
+        config = frozenset(engine.config)
+        for transition in transitions:
+            step = Step.of(transition)
+            if step is None:
+                continue
+            made = make_plan(config, (transition,), engine.history)
+            assert _plan_view(step.plan(config)) == _plan_view(made)
+        cfg = engine._tables.configuration(config)
+        for enabled, plan in cfg.plans.items():
+            while plan is not None:
+                if plan.holds(engine.history):
+                    assert _plan_view(plan) == _plan_view(
+                        make_plan(config, enabled, engine.history)
+                    )
+                plan = plan.other
+
+
+def _plan_view(plan: Plan) -> tuple[Any, ...]:
+    return (
+        plan.transitions,
+        plan.exits,
+        plan.records,
+        plan.entries,
+        plan.target,
+        plan.read,
+    )

@@ -205,38 +205,46 @@ class Node:
     order: int = 0  # document order
     depth: int = 0
     ancestors: tuple[Node, ...] = ()  # proper ancestors, innermost first (root included)
+    lineage: tuple[Node, ...] = ()  # the node, then its ancestors
 
     # Computed once by ChartBuilder.build(): the engine's hot path reads these.
     is_atomic: bool = False
     is_compound: bool = False
     eventless: tuple[Transition, ...] = ()
+    # Evented transitions by their descriptors' first dotted token ("*" apart): a descriptor
+    # can only match a name that starts with its token, so a lookup finds every candidate.
+    _by_token: dict[str, tuple[Transition, ...]] = field(default_factory=dict)
+    _wildcard: tuple[Transition, ...] = ()
     _by_event: dict[str, tuple[Transition, ...]] = field(default_factory=dict)
-    _chain: dict[str | None, tuple[tuple[Node, tuple[Transition, ...]], ...]] = field(
-        default_factory=dict
-    )
 
     def matching(self, name: str) -> tuple[Transition, ...]:
         """This node's transitions whose descriptors match the event name, in document order."""
+        if not self._by_token and not self._wildcard:
+            return ()
         found = self._by_event.get(name)
         if found is None:
             if len(self._by_event) >= CACHE_LIMIT:  # distinct names without end: start over
                 self._by_event.clear()
-            found = tuple(t for t in self.transitions if t.events and t.matches(name))
+            some = self._by_token.get(name.partition(".")[0], ())
+            if self._wildcard:
+                some = (*some, *self._wildcard)
+            found = (
+                tuple(t for t in self.transitions if t in some and t.matches(name)) if some else ()
+            )
             self._by_event[name] = found
         return found
 
-    def chain_candidates(self, name: str | None) -> tuple[tuple[Node, tuple[Transition, ...]], ...]:
-        """(owner, transitions) along this node and its ancestors that could react to the event
-        (`None`: eventless transitions); owners without candidates are left out."""
-        found = self._chain.get(name)
-        if found is None:
-            if len(self._chain) >= CACHE_LIMIT:
-                self._chain.clear()
-            owners = (self, *self.ancestors)
-            pairs = ((o, o.eventless if name is None else o.matching(name)) for o in owners)
-            found = tuple((o, c) for o, c in pairs if c)
-            self._chain[name] = found
-        return found
+    def index_events(self) -> None:
+        """Index the evented transitions by descriptor token (ChartBuilder.build() calls it)."""
+        by_token: dict[str, list[Transition]] = {}
+        for transition in self.transitions:
+            for descriptor in transition.events:
+                if descriptor != "*":
+                    bucket = by_token.setdefault(descriptor.partition(".")[0], [])
+                    if transition not in bucket:
+                        bucket.append(transition)
+        self._by_token = {token: tuple(found) for token, found in by_token.items()}
+        self._wildcard = tuple(t for t in self.transitions if "*" in t.events)
 
     def __repr__(self) -> str:
         return f"<{self.kind} {self.id}>"
@@ -398,6 +406,7 @@ class ChartBuilder:
         while stack:  # document order, depth and ancestors
             node, depth, ancestors = stack.pop()
             node.order, node.depth, node.ancestors = order, depth, ancestors
+            node.lineage = (node, *ancestors)
             proper = any(c.kind != "history" for c in node.children)
             node.is_atomic = node.kind in {"state", "final"} and not proper
             node.is_compound = node.kind in {"state", "scxml"} and proper
@@ -416,6 +425,7 @@ class ChartBuilder:
             )
         for node in self._nodes.values():
             node.eventless = tuple(t for t in node.transitions if not t.events)
+            node.index_events()
         for parent, targets, action in self._initials:
             owner = self._lookup(parent) if parent is not None else self._root
             owner.initial = Transition(

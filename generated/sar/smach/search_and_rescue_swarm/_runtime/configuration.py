@@ -5,6 +5,9 @@ algorithm (Appendix D), pure functions of the transitions, the configuration and
 The engine does not run them per event: `Tables` interns each configuration it reaches, and a
 `Configuration` keeps, per event name, the transitions that could react (`Selection`) and, per
 set of enabled transitions, the whole microstep (`Plan`), computed once by these functions.
+What a configuration seen for the first time costs is kept small: `Tables` indexes the chart's
+transitions by descriptor (what reacts to a name is a few look-ups), and a transition whose
+domain and entry set read no history has them computed once (`Step`), leaving the exit set.
 """
 
 from __future__ import annotations
@@ -199,8 +202,11 @@ def remove_conflicts(
 # which costs recomputation, never a different result.
 CONFIGURATION_LIMIT = 4096
 ENTRY_LIMIT = 1024
+NAME_LIMIT = 4096  # event names whose reacting transitions a chart keeps
 
 Chain = tuple[tuple[Node, tuple[Transition, ...]], ...]  # (owner, candidates), innermost first
+# Of one event name: the nodes with transitions that match it, each with those (document order).
+Reactors = Mapping[Node, tuple[Transition, ...]]
 # An entered state with the initial transition's and the history default's action it runs.
 Entry = tuple[Node, Action | None, Action | None]
 
@@ -217,11 +223,13 @@ class Selection:
     static: tuple[Transition, ...] | None
 
     @classmethod
-    def of(cls, atomic: Sequence[Node], name: str | None) -> Selection:
-        """The selection of the event `name` (None: eventless) over these atomic states."""
+    def of(cls, atomic: Sequence[Node], reactors: Reactors) -> Selection:
+        """The selection over these atomic states of an event whose candidates are `reactors`."""
+        if not reactors:
+            return NO_SELECTION
         chains: list[tuple[Transition | None, Chain]] = []
         for state in atomic:
-            pairs = state.chain_candidates(name)
+            pairs = tuple((o, reactors[o]) for o in state.lineage if o in reactors)
             if pairs:
                 first = pairs[0][1][0]
                 chains.append((first if first.cond is None and not first.bounded else None, pairs))
@@ -233,6 +241,20 @@ class Selection:
             if static is not None and fixed not in static:
                 static.append(fixed)
         return cls(tuple(chains), tuple(static) if static is not None else None)
+
+
+NO_SELECTION = Selection((), ())  # nothing in the configuration reacts
+
+
+def descriptor_keys(name: str) -> list[str]:
+    """Every descriptor that can match the event `name` (`Transition.matches`): `*`, the name,
+    and each prefix that ends before a dot, alone (`a` matches `a.b`) or with `.*`."""
+    keys = ["*", name]
+    dot = name.find(".")
+    while dot >= 0:
+        keys += (name[:dot], name[:dot] + ".*")
+        dot = name.find(".", dot + 1)
+    return keys
 
 
 @dataclass(eq=False, slots=True)
@@ -289,6 +311,12 @@ def make_plan(config: frozenset[Node], enabled: Sequence[Transition], history: H
                 reads.written[child] = recorded_history(child, state, config)
     records = tuple(reads.written.items())
     entry = entry_set(taken, reads)  # sees the history the exits just recorded
+    target = config.difference(exits) | entry.to_enter
+    return Plan(taken, exits, records, _entries(entry), target, tuple(reads.read.items()))
+
+
+def _entries(entry: EntrySet) -> tuple[Entry, ...]:
+    """The entry set in entry order, each state with the initial and history default it runs."""
     entries: list[Entry] = []
     for state in sorted(entry.to_enter, key=document_order):
         initial = state.initial if state in entry.default_entry else None
@@ -300,19 +328,61 @@ def make_plan(config: frozenset[Node], enabled: Sequence[Transition], history: H
                 default.action if default is not None else None,
             )
         )
-    target = config.difference(exits) | entry.to_enter
-    return Plan(taken, exits, records, tuple(entries), target, tuple(reads.read.items()))
+    return tuple(entries)
+
+
+@dataclass(frozen=True, slots=True)
+class Step:
+    """A transition whose domain and entry set read no history node: both are then the same
+    in every configuration and under every history, so they are computed once per transition
+    and a microstep taking it alone only has its exit set left to compute."""
+
+    transition: Transition
+    exits: bool  # whether it exits anything (it has targets)
+    scope: Node | None  # its domain: it exits the active states below it (None: all)
+    entries: tuple[Entry, ...]
+    entered: frozenset[Node]
+
+    @classmethod
+    def of(cls, transition: Transition) -> Step | None:
+        """The step of the transition, or None where history decides what it exits or enters."""
+        probe = _Reads({})  # records every history node looked up, whatever its value
+        scope = domain(transition, probe)
+        entry = entry_set((transition,), probe)
+        if probe.read:
+            return None
+        entered = frozenset(entry.to_enter)
+        return cls(transition, bool(transition.targets), scope, _entries(entry), entered)
+
+    def plan(self, config: frozenset[Node]) -> Plan:
+        """`make_plan(config, (transition,), history)`, for any history."""
+        scope = self.scope
+        exits: tuple[Node, ...] = ()
+        if self.exits:
+            below = (s for s in config if scope is None or scope in s.ancestors)
+            exits = tuple(sorted(below, key=document_order, reverse=True))
+        records = tuple(
+            (child, recorded_history(child, state, config))
+            for state in exits
+            for child in state.children
+            if child.kind == "history"
+        )
+        target = config.difference(exits) | self.entered
+        return Plan((self.transition,), exits, records, self.entries, target, ())
 
 
 class Configuration:
     """A configuration the engine reached, with its selections and plans as they are needed."""
 
-    __slots__ = ("atomic", "eventless", "plans", "selections", "states")
+    __slots__ = ("atomic", "eventless", "plans", "selections", "states", "steps", "tables")
 
-    def __init__(self, states: frozenset[Node]) -> None:
+    def __init__(self, states: frozenset[Node], tables: Tables) -> None:
         self.states = states
+        self.tables = tables
+        self.steps = tables.steps
         self.atomic = tuple(sorted((n for n in states if n.is_atomic), key=document_order))
-        self.eventless = Selection.of(self.atomic, None)  # looked at after every microstep
+        # looked at after every microstep
+        self.eventless = Selection.of(self.atomic, tables.eventless)
         self.selections: dict[str | None, Selection] = {}
         self.plans: dict[tuple[Transition, ...], Plan] = {}
 
@@ -322,7 +392,7 @@ class Configuration:
         if found is None:
             if len(self.selections) >= ENTRY_LIMIT:
                 self.selections.clear()
-            found = self.selections[name] = Selection.of(self.atomic, name)
+            found = self.selections[name] = Selection.of(self.atomic, self.tables.reactors(name))
         return found
 
     def plan(self, enabled: tuple[Transition, ...], history: History) -> Plan:
@@ -336,7 +406,17 @@ class Configuration:
         if len(self.plans) >= ENTRY_LIMIT:
             self.plans.clear()
             first = None
-        made = make_plan(self.states, enabled, history)
+        made = None
+        if len(enabled) == 1:
+            transition = enabled[0]
+            if transition in self.steps:
+                step = self.steps[transition]
+            else:
+                step = self.steps[transition] = Step.of(transition)
+            if step is not None:
+                made = step.plan(self.states)
+        if made is None:
+            made = make_plan(self.states, enabled, history)
         made.other = first
         self.plans[enabled] = made
         return made
@@ -346,10 +426,24 @@ class Tables:
     """A chart's dispatch tables: the configurations reached so far, interned (engines of the
     same chart share them: a plan depends on nothing an engine has of its own)."""
 
-    __slots__ = ("configurations", "fillers")
+    __slots__ = ("by_descriptor", "by_name", "configurations", "eventless", "fillers", "steps")
 
-    def __init__(self) -> None:
+    def __init__(self, nodes: Iterable[Node]) -> None:
         self.configurations: dict[frozenset[Node], Configuration] = {}
+        # The chart's evented transitions by descriptor, its eventless ones by source: linear in
+        # the chart, so that what reacts to a name is a few look-ups, not a walk of the states.
+        self.by_descriptor: dict[str, list[Transition]] = {}
+        self.eventless: dict[Node, tuple[Transition, ...]] = {}
+        for node in nodes:
+            if node.eventless:
+                self.eventless[node] = node.eventless
+            for transition in node.transitions:
+                for descriptor in transition.events:
+                    self.by_descriptor.setdefault(descriptor, []).append(transition)
+        self.by_name: dict[str, Reactors] = {}
+        # Per transition taken alone, its Step (None: it reads history); as many as the chart
+        # has transitions, so unbounded.
+        self.steps: dict[Transition, Step | None] = {}
         self.fillers: dict[str, Callable[[Mapping[str, Any] | None], Record]] = {}
 
     def filler(
@@ -367,5 +461,29 @@ class Tables:
         if found is None:
             if len(self.configurations) >= CONFIGURATION_LIMIT:
                 self.configurations.clear()
-            found = self.configurations[states] = Configuration(states)
+            found = self.configurations[states] = Configuration(states, self)
+        return found
+
+    def after(self, plan: Plan) -> Configuration:
+        """The configuration the plan leads to. The plan then keeps the interned set of states:
+        the next look-ups find it by identity rather than comparing the sets."""
+        found = self.configuration(plan.target)
+        plan.target = found.states
+        return found
+
+    def reactors(self, name: str) -> Reactors:
+        """The nodes with transitions that match the event `name`, with those transitions."""
+        found = self.by_name.get(name)
+        if found is None:
+            if len(self.by_name) >= NAME_LIMIT:
+                self.by_name.clear()
+            hits: dict[Node, list[Transition]] = {}
+            for key in descriptor_keys(name):
+                for transition in self.by_descriptor.get(key, ()):
+                    hits.setdefault(transition.source, []).append(transition)
+            found = self.by_name[name] = {}
+            for node, some in hits.items():
+                matching = tuple(t for t in node.transitions if t in some and t.matches(name))
+                if matching:
+                    found[node] = matching
         return found

@@ -8,7 +8,10 @@ answers the world's probes (`<lockstep_topic>/probe`, `{"k", "wave", "t_ns"}`) w
 or `idle` changes while the world waits. `idle`: the process's clock has reached the probe's
 time, no scheduled callback is due, and no member has an event queued. The world steps only
 when every report is idle and every message sent has been received (docs/detailed.md, "The
-lockstep barrier"). Off (the default, an empty `lockstep_topic`): nothing is created, nothing
+lockstep barrier"). The process starts its members and station program only at the world's
+first probe (`wait_for_world`): nothing it sends can reach a server before the world, which
+starts once every reporter (the behaviour servers too) is ready, is stepping; until they have
+started, the reporter is not idle. Off (the default, an empty `lockstep_topic`): nothing is created, nothing
 is counted.
 
 Channels: a topic every subscriber hears is counted by its name when sent (`/swarm/events`)
@@ -51,6 +54,7 @@ class Lockstep:
         self._scheduler = scheduler
         self._probe: tuple[int, int, int] | None = None  # (k, wave, t_ns)
         self._last: Any = None
+        self.started = False  # the members and the station program run (`wait_for_world`)
         self._publisher = node.create_publisher(string, topic, QOS)
         node.create_subscription(string, f"{topic}/probe", self._on_probe, QOS)
         steady = Clock(clock_type=ClockType.STEADY_TIME)  # polls in wall time: /clock waits
@@ -68,7 +72,9 @@ class Lockstep:
 
     def idle(self) -> bool:
         """Nothing left to do at the probe's time (the module docstring)."""
-        if self._probe is None or not self._scheduler.reached(self._probe[2]):
+        if not self.started or self._probe is None:
+            return False
+        if not self._scheduler.reached(self._probe[2]):
             return False
         return not self._scheduler.due() and all(quiet() for quiet in self.quiet)
 
@@ -85,6 +91,24 @@ class Lockstep:
         report = {"k": k, "wave": wave, "by": self.by, "settle": False, "idle": idle,
                   "sent": dict(self.sent), "received": dict(self.received)}  # fmt: skip
         self._publisher.publish(self._string(data=json.dumps(report, sort_keys=True)))
+
+
+def wait_for_world(scheduler: Scheduler, spin: Callable[[Callable[[], bool]], bool]) -> bool:
+    """With the barrier on, `spin` until the world's first probe; True when the process may
+    start its members (at once when the barrier is off). `started` is set by the caller's
+    `started()` afterwards."""
+    lockstep = scheduler.lockstep
+    if lockstep is None:
+        return True
+    print(json.dumps({"lockstep": "waiting", "by": lockstep.by}), flush=True)
+    return spin(lambda: lockstep._probe is not None)
+
+
+def started(scheduler: Scheduler) -> None:
+    """The members and the station program have started: the reporter may be idle now."""
+    if scheduler.lockstep is not None:
+        scheduler.lockstep.started = True
+        scheduler.lockstep.check()
 
 
 def start(node: Node, scheduler: Scheduler, by: str) -> Lockstep | None:

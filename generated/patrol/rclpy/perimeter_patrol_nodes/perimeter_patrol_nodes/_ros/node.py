@@ -22,6 +22,7 @@ import sys
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import rclpy
@@ -353,7 +354,10 @@ def run_member(spec: MemberSpec, argv: Sequence[str] | None = None) -> int:
         return 2
     executor.add_node(member)
     try:
+        if not lockstep.wait_for_world(member.scheduler, partial(spin_until, executor)):
+            return 3  # not reached: no timeout given, it waits for the world or a signal
         member.start()
+        lockstep.started(member.scheduler)
         spin_until(executor, lambda: member.finished)
         spin_until(executor, member.idle, timeout=2.0)
         member.flush()

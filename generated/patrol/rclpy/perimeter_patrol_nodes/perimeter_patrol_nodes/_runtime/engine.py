@@ -65,7 +65,7 @@ class Engine:
         self._ids = itertools.count(1)
         self._events = self.chart.events
         if self.chart.tables is None:
-            self.chart.tables = Tables()
+            self.chart.tables = Tables(self.chart.nodes.values())
         self._tables: Tables = self.chart.tables
         # The interned configuration, None while a microstep changes `config` (or after one
         # was interrupted by an exception): the next selection interns `config` again.
@@ -301,7 +301,7 @@ class Engine:
                 self._run(default, "history default in", state)
             if state.kind == "final":
                 self._reached_final(state)
-        self._cfg = self._tables.configuration(plan.target)
+        self._cfg = self._tables.after(plan)
 
     def _reached_final(self, state: Node) -> None:
         parent = state.parent

@@ -41,6 +41,7 @@ from .._runtime.args import Parser, number
 from .._runtime.engine import Event as SwarmEvent
 from .._runtime.member import Library
 from .._runtime.plugins import PluginError, Plugins
+from . import lockstep
 from .bindings import BindingError, resolve
 from .declared import FeedbackRecord
 from .expressions import ScriptError
@@ -261,6 +262,7 @@ def _run(
     for member in members:
         member.start()
     StationProgram(swarm.station, program, members, args.time_scale).advance()
+    lockstep.started(scheduler)
     if scheduler.simulated:
         duration = math.inf if args.duration is None else args.duration * args.time_scale
         spin_until(
@@ -368,6 +370,13 @@ def main(
         _populate(swarm, specs, defaults, events, args, context)
         if not _connect(executor, swarm, args):
             print(f"{prog}: action servers not found in {args.server_timeout} s", file=sys.stderr)
+            return 3
+        waited = lockstep.wait_for_world(
+            swarm.station.scheduler,
+            lambda done: spin_until(executor, done, args.server_timeout, 0.01),
+        )
+        if not waited:
+            print(f"{prog}: no probe from the world in {args.server_timeout} s", file=sys.stderr)
             return 3
         setup = time.monotonic() - process_start
         wall, simulated = _run(executor, swarm, program, args)
