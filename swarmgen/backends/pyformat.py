@@ -13,7 +13,8 @@ this module being complete (tests/test_black_stable.py counts those).
 
 Most physical lines are whole statements that fit and need nothing but the quote change: those
 are copied without Python's tokenizer (`quick_line`, an exact test that says "tokenize it" when
-in doubt); every other statement is tokenized on its own.
+in doubt); so are statements the renderers printed in black's layout (`pylayout`, which records
+them: `pyknown`); every other statement is tokenized on its own.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 
 from swarmgen.backends.pyblank import Entry, blank_lines
+from swarmgen.backends.pyknown import laid_out
 from swarmgen.backends.pysplit import (
     CLOSING,
     COMMA_PRIORITY,
@@ -42,7 +44,17 @@ from swarmgen.backends.pysplit import (
     width,
 )
 
-__all__ = ["LINE_LENGTH", "STATS", "Unsupported", "format_source", "normalize_string"]
+__all__ = [
+    "LINE_LENGTH",
+    "STATS",
+    "STRINGS",
+    "Unsupported",
+    "format_source",
+    "normalize_plain",
+    "normalize_string",
+    "plain_brackets",
+    "requote",
+]
 
 
 @dataclass
@@ -123,6 +135,40 @@ _PUNCTUATION = re.compile(r",\)|[()\[\]{},]")
 _NAME_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_")
 
 
+STRINGS = _STRINGS  # for `pylayout`, which reads statements the same way
+
+
+def normalize_plain(text: str) -> str | None:
+    """`text` (a line or part of one) with black's quote change, when its strings are plain
+    one-line literals and it holds no comment, escape, string prefix or second statement
+    (`_plain`); None otherwise. Brackets need not balance."""
+    plain = _plain(text)
+    if plain is None:
+        return None
+    indent, _, pieces = plain
+    return text[:indent] + _requoted(pieces)
+
+
+def plain_brackets(text: str) -> bool:
+    """The brackets of `text` (plain, `_plain`) match and it has no magic trailing comma."""
+    pieces = _STRINGS.split(text)
+    return _plain_brackets(_PUNCTUATION.findall("0".join(pieces[::2])))
+
+
+def requote(text: str) -> str:
+    """black's quote change over `text` whose every string is a plain one-line literal (as
+    `normalize_plain` accepts), whatever its brackets or lines."""
+    return _requoted(_STRINGS.split(text))
+
+
+def _requoted(pieces: list[str]) -> str:
+    """Code and plain string pieces joined, `'...'` printed `"..."` (no quote inside)."""
+    for i in range(1, len(pieces), 2):
+        if pieces[i][0] == "'":
+            pieces[i] = f'"{pieces[i][1:-1]}"'
+    return "".join(pieces)
+
+
 def quick_line(line: str) -> str | None:
     """`line` as the tokenized path prints it, when that is a copy with black's quote change
     (a whole statement on one line that fits, with only plain string literals and nothing black
@@ -133,10 +179,7 @@ def quick_line(line: str) -> str | None:
     indent, body, pieces = plain
     if _SLOW_FORMS.search(body) or not _plain_brackets(_PUNCTUATION.findall("0".join(pieces[::2]))):
         return None  # the statement goes on, or black rewrites it (a magic trailing comma, ...)
-    for i in range(1, len(pieces), 2):
-        if pieces[i][0] == "'":
-            pieces[i] = f'"{pieces[i][1:-1]}"'
-    return line[:indent] + "".join(pieces)
+    return line[:indent] + _requoted(pieces)
 
 
 def _plain(line: str) -> tuple[int, str, list[str]] | None:
@@ -405,6 +448,11 @@ def _format_lines(
         if not code or code[0] == "#":  # the tokenizer's blank and comment lines
             entries.append(_entry(line.rstrip(), fallback))
             i += 1
+            continue
+        laid = laid_out(lines, i)
+        if laid:
+            entries.append(Entry((len(line) - len(code)) // 4, lines[i : i + laid], code))
+            i += laid
             continue
         quick = quick_line(line)
         if quick is not None:

@@ -11,7 +11,7 @@ import functools
 from dataclasses import dataclass, field
 from typing import Any
 
-from swarmgen.backends import pyformat
+from swarmgen.backends import pyformat, pylayout
 from swarmgen.chart import model as c
 from swarmgen.ir import expr
 from swarmgen.names import identifier
@@ -72,6 +72,7 @@ class ChartCode:
     """What a template prints for one chart: helper functions, then builder statements."""
 
     functions: list[Function] = field(default_factory=list)
+    # each in black's layout (`pylayout`) for `build()`: further lines carry their indentation
     statements: list[str] = field(default_factory=list)
     data_literal: str = "{}"
 
@@ -202,28 +203,28 @@ class ChartRenderer:
 
     # --- structure
 
+    def _statement(self, callee: str, *args: pylayout.Arg) -> None:
+        """A builder call in `build()` (one level deep), in black's layout when `pylayout`
+        reproduces it."""
+        self.code.statements.append(pylayout.statement(1, callee, args))
+
     def _node(self, node: c.Node, parent: str | None) -> None:
-        options = [f"name={(node.name or node.id)!r}"]
+        options: list[pylayout.Arg] = [f"name={(node.name or node.id)!r}"]
         if node.history:
             options.append(f"history={node.history!r}")
         options.extend(self._hooks(node))
         if node.call is not None:
             call = node.call
-            options.append(
-                f"call=Call({call.behaviour!r}, {call.kind!r}, {self._args(call)}, "
-                f"{tuple(call.results)!r}, {tuple(call.outcomes)!r})"
-            )
+            parts = [repr(call.behaviour), repr(call.kind), self._args(call)]
+            parts += [repr(tuple(call.results)), repr(tuple(call.outcomes))]
+            options.append(pylayout.Kw("call=", pylayout.Call("Call", tuple(parts))))
         if node.timers:
             options.append(f"timers={tuple((t.event, t.delay_ms) for t in node.timers)!r}")
-        self.code.statements.append(
-            f"b.node({node.id!r}, {node.kind!r}, {parent!r}, {', '.join(options)})"
-        )
+        self._statement("b.node", repr(node.id), repr(node.kind), repr(parent), *options)
         if node.initial is not None:
             action = self._action(node.initial.actions)
-            extra = f", action={action}" if action else ""
-            self.code.statements.append(
-                f"b.initial({node.id!r}, {tuple(node.initial.targets)!r}{extra})"
-            )
+            extra = [f"action={action}"] if action else []
+            self._statement("b.initial", repr(node.id), repr(tuple(node.initial.targets)), *extra)
         for child in node.children:
             self._node(child, node.id)
         for transition in node.transitions:
@@ -231,10 +232,8 @@ class ChartRenderer:
 
     def _transition(self, source: str, transition: c.Transition) -> None:
         options = self._transition_options(transition, "cond")
-        head = (
-            f"b.transition({source!r}, {tuple(transition.events)!r}, {tuple(transition.targets)!r}"
-        )
-        self.code.statements.append(head + "".join(f", {o}" for o in options) + ")")
+        events, targets = repr(tuple(transition.events)), repr(tuple(transition.targets))
+        self._statement("b.transition", repr(source), events, targets, *options)
 
 
 def _unwrap(text: str) -> str:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import keyword
 from dataclasses import dataclass, field
 
+from swarmgen.backends import pylayout
 from swarmgen.backends.asyncio_backend import RUNTIME_MODULES
 from swarmgen.backends.pycommon import PackageBackend, member_view
 from swarmgen.backends.pyrender import (
@@ -149,23 +150,24 @@ class SmachRenderer(ChartRenderer):
         """`smach.<kind>.add(label, state, transitions=..., remapping=..., name=...)`."""
         remapping: dict[str, str] = {}
         state = self._state(node, remapping)
-        parts = [repr(node.id), state]
+        parts: list[pylayout.Arg] = [repr(node.id), state]
         transitions = self._transitions(node)
-        if transitions:
-            parts.append(f"transitions={transitions}")
+        if transitions is not None:
+            parts.append(pylayout.Kw("transitions=", transitions))
         if remapping:
             parts.append(f"remapping={remapping!r}")
         if node.name and node.name != node.id:
             parts.append(f"name={node.name!r}")
-        return f"smach.{kind}.add({', '.join(parts)})"
+        # in a factory's `with sm:` block, two levels deep
+        return pylayout.statement(2, f"smach.{kind}.add", parts)
 
-    def _state(self, node: c.Node, remapping: dict[str, str]) -> str:
+    def _state(self, node: c.Node, remapping: dict[str, str]) -> pylayout.Node:
         is_container = bool(node.children) and node.kind in {"state", "parallel"}
         if is_container:
             return self._factory(node, remapping)
         options = self._state_options(node, remapping)
         if node.kind == "final":
-            return f"smach.FinalState({', '.join(options)})"
+            return pylayout.Call("smach.FinalState", tuple(options))
         if node.kind == "history":
             history = [f"deep={node.history == 'deep'}"]
             if node.initial is not None:
@@ -175,12 +177,12 @@ class SmachRenderer(ChartRenderer):
                 action = self._action(node.initial.actions)
                 if action:
                     history.append(f"action={action}")
-            return f"smach.HistoryState({', '.join(history)})"
+            return pylayout.Call("smach.HistoryState", tuple(history))
         if node.call is not None:
-            return f"smach.BehaviourState({', '.join(options)})"
+            return pylayout.Call("smach.BehaviourState", tuple(options))
         if node.pseudostate:
-            return f"smach.PseudoState({', '.join([repr(node.pseudostate), *options])})"
-        return f"smach.EventState({', '.join(options)})"
+            return pylayout.Call("smach.PseudoState", (repr(node.pseudostate), *options))
+        return pylayout.Call("smach.EventState", tuple(options))
 
     def _state_options(self, node: c.Node, remapping: dict[str, str]) -> list[str]:
         """Behaviour (leaf: positional, container: `behaviour=`), entry/exit actions, timers."""
@@ -233,7 +235,9 @@ class SmachRenderer(ChartRenderer):
 
     # --- transitions
 
-    def _transitions(self, node: c.Node) -> str:
+    def _transitions(self, node: c.Node) -> pylayout.Seq | None:
+        """The `transitions=` value: a dict {key: target} when every transition is a plain
+        one, else a list of `smach.Transition(...)`; None when the state has none."""
         scope = self.parent[node.id]
         specs = []
         simple = True
@@ -245,20 +249,21 @@ class SmachRenderer(ChartRenderer):
             simple = simple and plain and len(targets) == 1 and not options
             specs.append((keys, targets, options))
         if not specs:
-            return ""
+            return None
         if simple and len({keys[0] for keys, _, _ in specs}) == len(specs):
-            return "{" + ", ".join(f"{keys[0]}: {targets[0]!r}" for keys, targets, _ in specs) + "}"
-        return "[" + ", ".join(self._transition_code(*spec) for spec in specs) + "]"
+            items = (pylayout.Kw(f"{keys[0]}: ", repr(targets[0])) for keys, targets, _ in specs)
+            return pylayout.Seq("{", tuple(items))
+        return pylayout.Seq("[", tuple(self._transition_code(*spec) for spec in specs))
 
     @staticmethod
-    def _transition_code(keys: list[str], targets: list[str], options: list[str]) -> str:
+    def _transition_code(keys: list[str], targets: list[str], options: list[str]) -> pylayout.Call:
         parts = []
         if keys:
             parts.append(keys[0] if len(keys) == 1 else f"({', '.join(keys)})")
         if targets:
             to = repr(targets[0]) if len(targets) == 1 else repr(tuple(targets))
             parts.append(to if keys else f"to={to}")
-        return f"smach.Transition({', '.join([*parts, *options])})"
+        return pylayout.Call("smach.Transition", (*parts, *options))
 
     def _keys(self, node: c.Node, events: tuple[str, ...]) -> list[str]:
         """Transition keys as code: outcome names, container outcomes, event names, in the
