@@ -106,7 +106,7 @@ def run_one(
                  "--ros-args", "-p", "use_sim_time:=true",
                  "-p", "lockstep_topic:=/world/settle"]  # fmt: skip
         group.start("swarm", swarm, env, here)
-        run.failure = _await_members(group, START_LIMIT_S, cancel)
+        run.failure = _await_swarm(group, START_LIMIT_S, cancel)
         if run.failure is None:
             group.start("world", [python, "-m", "swarmgen_library.world_node", "world.json"],
                         env, here)  # fmt: skip
@@ -120,7 +120,7 @@ def run_one(
     return run
 
 
-def _await_members(group: ProcessGroup, limit: float, cancel: threading.Event) -> str | None:
+def _await_swarm(group: ProcessGroup, limit: float, cancel: threading.Event) -> str | None:
     """Wait until the swarm waits for the world's first probe (`{"lockstep": "waiting"}`: its
     members are connected to their servers, and start at the first probe)."""
     swarm = next(s for s in group.started if s.name == "swarm")

@@ -103,7 +103,7 @@ class Barrier:
 
     def report(self, text: str) -> bool:
         """A report; whether it belongs to the current wave (kept: the latest per reporter)."""
-        message = _json_object(text)
+        message = json_object(text)
         if message is None:
             return False
         k, wave = message.get("k"), message.get("wave")
@@ -157,7 +157,8 @@ def _reactive(sums: Totals, own: Mapping[str, int]) -> Totals:
     return {k: v for k, v in sums.items() if k.partition(":")[2].partition("@")[0] not in own}
 
 
-def _json_object(text: str) -> dict[str, Any] | None:
+def json_object(text: str) -> dict[str, Any] | None:
+    """A message's JSON object, or None for anything else (bad JSON, another value)."""
     try:
         value = json.loads(text)
     except (json.JSONDecodeError, TypeError):

@@ -15,6 +15,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+from .barrier import json_object
 from .geometry import ZERO, Command
 from .world import World
 from .worldfile import NS_PER_S, WorldFile
@@ -77,7 +78,7 @@ class Run:
     def report(self, text: str) -> None:
         """A step report (`{"k", "by", "settle"}`): counted for the current step only; a
         late one that asks to settle still settles, before the next step."""
-        message = _json_object(text)
+        message = json_object(text)
         k = None if message is None else message.get("k")
         if message is None or isinstance(k, bool) or not isinstance(k, int) or k > self.k:
             self.bad_messages += 1
@@ -90,7 +91,7 @@ class Run:
 
     def rescue(self, text: str) -> None:
         """A rescue (`{"target", "robot", "k"}`): the target's rescue time is k * dt."""
-        message = _json_object(text)
+        message = json_object(text)
         target = None if message is None else message.get("target")
         if message is None or target not in self.target_ids or isinstance(target, bool):
             self.bad_messages += 1
@@ -201,11 +202,3 @@ def write_atomic(path: Path, data: dict[str, Any]) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
-
-
-def _json_object(text: str) -> dict[str, Any] | None:
-    try:
-        value = json.loads(text)
-    except (json.JSONDecodeError, TypeError):
-        return None
-    return value if isinstance(value, dict) else None
