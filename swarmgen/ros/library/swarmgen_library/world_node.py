@@ -30,6 +30,8 @@ from .worldrun import Run, write_atomic
 POLL_S = 0.1  # longest blocking spin: how fast a signal is noticed
 TEARDOWN_S = 15.0
 
+FINAL_ACK_S = 5.0  # how long the final /world/status waits for every subscriber's ack
+
 
 class Interrupted(Exception):
     """SIGINT or SIGTERM arrived: end the run, marked partial."""
@@ -266,7 +268,8 @@ class WorldNode:
         if final:
             from rclpy.duration import Duration
 
-            self.status_pub.wait_for_all_acked(Duration(seconds=1))
+            # bounded, and over at once when acknowledged; 1 s was seen to lose it under load
+            self.status_pub.wait_for_all_acked(Duration(seconds=FINAL_ACK_S))
 
     def result(self, reason: str, wall_s: float) -> dict[str, Any]:
         """The run's result, with the barrier's timeouts (and, timing only, its waves)."""
