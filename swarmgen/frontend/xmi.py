@@ -7,7 +7,6 @@ children or `href`s. Safe: no DTDs, entities, network or XInclude; size and dept
 
 from __future__ import annotations
 
-import codecs
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,10 +17,16 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend.raw import RawElement, RawModel, StereotypeApplication
-from swarmgen.inputs import InputRefused, read_limited
+from swarmgen.frontend.safexml import (
+    InputError,
+    decoded,
+    node_line,
+    parse_safely,
+    quoted,
+    read_bounded,
+)
 from swarmgen.span import Span
 
-MAX_BYTES = 64 * 1024 * 1024
 MAX_DEPTH = 200
 MAX_ELEMENTS = 3_000_000
 # lxml reads each attribute value by a linear search of its element's attributes, so reading an
@@ -94,183 +99,44 @@ class _Context:
         return role
 
 
-class InputError(Exception):
-    """The input cannot be read as a model at all; carries the diagnostic to report."""
-
-    def __init__(self, diagnostic: Diagnostic) -> None:
-        super().__init__(diagnostic.message)
-        self.diagnostic = diagnostic
-
-
 def load(path: Path) -> tuple[RawModel | None, list[Diagnostic]]:
     """Read one XMI file. Returns the raw model (None if unreadable) and the diagnostics."""
     shown = str(path)
     try:
-        data = _read_bounded(path, shown)
-        tree = _parse_safely(data, shown)
+        data = read_bounded(path, shown)
+        tree = parse_safely(data, shown)
         _check_root(tree, shown)
-        text = _decoded(data, tree.docinfo.encoding or "utf-8", shown)
+        text = decoded(data, tree.docinfo.encoding or "utf-8", shown)
     except InputError as err:
         return None, [err.diagnostic]
+    return from_tree(tree, text, shown)
+
+
+def is_xmi_root(namespace: str | None, local: str) -> bool:
+    """Whether a document with this root element is an XMI (or bare UML) export."""
+    return local == "XMI" or (
+        local in {"Model", "Package", "Profile"} and "UML" in (namespace or "").upper()
+    )
+
+
+def from_tree(
+    tree: etree._ElementTree, text: str, shown: str
+) -> tuple[RawModel | None, list[Diagnostic]]:
+    """The raw model of a parsed XMI document (`text`: its decoded source, for columns)."""
     ctx = _Context(shown, text.splitlines(), [], {}, {})
-    root = tree.getroot()
     try:
-        model = _build(root, ctx)
+        model = _build(tree.getroot(), ctx)
     except InputError as err:
         return None, [err.diagnostic]
     return model, ctx.diagnostics
 
 
-def _read_bounded(path: Path, shown: str) -> bytes:
-    """The file's bytes, read with the size limit enforced while reading: a FIFO, a device or a
-    /proc file (which report a size of 0) would otherwise be read forever."""
-    span = Span(file=shown)
-    try:
-        data = read_limited(path, MAX_BYTES)
-    except InputRefused as err:
-        if str(err).startswith("is larger than"):
-            raise InputError(_too_large(path, span)) from None
-        raise InputError(dg.UNREADABLE.at(span, error=str(err))) from None
-    if not data.strip():
-        raise InputError(dg.UNREADABLE.at(span, "empty"))
-    return data
-
-
-def _too_large(path: Path, span: Span) -> Diagnostic:
-    limit = MAX_BYTES // 2**20
-    try:
-        mib = path.stat().st_size / 2**20
-    except OSError:
-        return dg.TOO_LARGE.at(span, "file-unknown-size", limit=limit)
-    return dg.TOO_LARGE.at(span, "file", mib=mib, limit=limit)
-
-
-def _parse_safely(data: bytes, shown: str) -> etree._ElementTree:
-    parser = etree.XMLParser(
-        resolve_entities=False,
-        no_network=True,
-        load_dtd=False,
-        dtd_validation=False,
-        huge_tree=False,
-        remove_blank_text=False,
-    )
-    text = _ascii_compatible(data)  # UTF-16/32 would hide "<!ENTITY" from a byte search
-    head = text[:4096].lstrip()
-    if b"<!DOCTYPE" in head or b"<!ENTITY" in text:
-        raise InputError(_forbidden_dtd(shown, _line_of(text, b"<!")))
-    _check_declared_encoding(head, shown)
-    try:
-        tree = etree.ElementTree(etree.fromstring(data, parser))
-    except etree.XMLSyntaxError as err:
-        line, col = err.position or (0, 0)  # libxml2 columns are 1-based already
-        message = _POSITION_SUFFIX.sub("", str(err.msg or err).split(" (line")[0])
-        if message.startswith("Unsupported encoding"):  # a name Python knows, libxml2 not
-            name = message.partition(":")[2].strip()
-            raise InputError(_bad_encoding(name, shown, _encoding_col(head))) from None
-        raise InputError(
-            dg.NOT_XML.at(Span(file=shown, line=line, col=max(col, 1)), error=message)
-        ) from None
-    if tree.docinfo.internalDTD is not None:  # a DOCTYPE past the first 4 KiB
-        raise InputError(_forbidden_dtd(shown, _line_of(text, b"<!DOCTYPE")))
-    for namespace in _XINCLUDE_NAMESPACES:
-        include = next(tree.getroot().iter(f"{{{namespace}}}*"), None)
-        if include is not None:
-            raise InputError(
-                dg.FORBIDDEN_XML.at(Span(file=shown, line=_line(include) or 1, col=1), "xinclude")
-            )
-    return tree
-
-
-# The XML declaration's encoding name (on the ASCII-compatible text, see _ascii_compatible).
-_DECLARED_ENCODING = re.compile(rb"^<\?xml\s[^>]*?\bencoding\s*=\s*([\"'])(.*?)\1")
-
-
-def _check_declared_encoding(head: bytes, shown: str) -> None:
-    """An encoding name that Python cannot decode is refused before parsing: libxml2 (iconv)
-    knows names Python does not (ARMSCII-8, TCVN), and the source text is decoded again for
-    columns and excerpts."""
-    match = _DECLARED_ENCODING.match(head)
-    if match is None:
-        return
-    name = match.group(2).decode("ascii", errors="replace")
-    if _text_codec(name) is None:
-        raise InputError(_bad_encoding(name, shown, match.start(2) + 1))
-
-
-def _encoding_col(head: bytes) -> int:
-    match = _DECLARED_ENCODING.match(head)
-    return match.start(2) + 1 if match else 1
-
-
-def _text_codec(name: str) -> codecs.CodecInfo | None:
-    """The codec of a text encoding name, None for an unknown one or a bytes-to-bytes codec
-    (`rot13`, `base64`): `bytes.decode` refuses those too."""
-    try:
-        info = codecs.lookup(name) if name.strip() else None
-    except (LookupError, ValueError):  # ValueError: a NUL in the name
-        return None
-    return info if info is not None and getattr(info, "_is_text_encoding", True) else None
-
-
-def _bad_encoding(name: str, shown: str, col: int) -> Diagnostic:
-    span = Span(file=shown, line=1, col=max(col, 1))
-    if not name.strip():
-        return dg.NOT_XML.at(span, "empty-encoding")
-    return dg.NOT_XML.at(span, "encoding", encoding=_quoted(name))
-
-
-def _quoted(text: str, limit: int = 40) -> str:
-    clipped = text if len(text) <= limit else text[: limit - 1] + "…"
-    return "'" + "".join(c if c.isprintable() else "?" for c in clipped) + "'"
-
-
-def _decoded(data: bytes, encoding: str, shown: str) -> str:
-    """The source text for columns and excerpts, in the encoding libxml2 used."""
-    try:
-        return data.decode(encoding, errors="replace")
-    except (LookupError, UnicodeError):  # a codec that refuses even with errors="replace"
-        raise InputError(_bad_encoding(encoding, shown, 1)) from None
-
-
-_POSITION_SUFFIX = re.compile(r", line \d+, column \d+$")
-_XINCLUDE_NAMESPACES = ("http://www.w3.org/2001/XInclude", "http://www.w3.org/2003/XInclude")
-# XML in UTF-16/32, recognised by its byte order mark or its first character '<' (XML 1.0 F.1).
-_WIDE_ENCODINGS = (
-    (codecs.BOM_UTF32_LE, "utf-32"),
-    (codecs.BOM_UTF32_BE, "utf-32"),
-    (codecs.BOM_UTF16_LE, "utf-16"),
-    (codecs.BOM_UTF16_BE, "utf-16"),
-    (b"<\x00\x00\x00", "utf-32-le"),
-    (b"\x00\x00\x00<", "utf-32-be"),
-    (b"<\x00", "utf-16-le"),
-    (b"\x00<", "utf-16-be"),
-)
-
-
-def _ascii_compatible(data: bytes) -> bytes:
-    """The document re-encoded as UTF-8 if it is in UTF-16/32; otherwise unchanged."""
-    for prefix, codec in _WIDE_ENCODINGS:
-        if data.startswith(prefix):
-            return data.decode(codec, errors="replace").encode("utf-8")
-    return data
-
-
-def _forbidden_dtd(shown: str, line: int) -> Diagnostic:
-    return dg.FORBIDDEN_XML.at(Span(file=shown, line=line, col=1))
-
-
-def _line_of(data: bytes, needle: bytes) -> int:
-    at = data.find(needle)
-    return data.count(b"\n", 0, at) + 1 if at >= 0 else 1
-
-
 def _check_root(tree: etree._ElementTree, shown: str) -> None:
     root = tree.getroot()
-    local = etree.QName(root).localname
-    uri = etree.QName(root).namespace or ""
-    if local == "XMI" or (local in {"Model", "Package", "Profile"} and "UML" in uri.upper()):
-        return
-    raise InputError(dg.NOT_XMI.at(Span(file=shown, line=_line(root) or 1, col=1), tag=root.tag))
+    qname = etree.QName(root)
+    if not is_xmi_root(qname.namespace, qname.localname):
+        span = Span(file=shown, line=node_line(root) or 1, col=1)
+        raise InputError(dg.NOT_XMI.at(span, tag=root.tag))
 
 
 def _build(root: etree._Element, ctx: _Context) -> RawModel:
@@ -340,7 +206,7 @@ def _make_element(
     node: etree._Element, parent: RawElement | None, parent_path: str, ctx: _Context, depth: int
 ) -> RawElement:
     ctx.count += 1
-    line = _line(node)
+    line = node_line(node)
     if depth > MAX_DEPTH or ctx.count > MAX_ELEMENTS:
         span = Span(file=ctx.file, line=line, col=1)
         if depth > MAX_DEPTH:
@@ -382,7 +248,7 @@ def _attributes(node: etree._Element, ctx: _Context, line: int) -> list[tuple[st
             dg.TOO_LARGE.at(
                 Span(file=ctx.file, line=line, col=_column(node, line, ctx)),
                 "attributes",
-                element=_quoted(etree.QName(node).localname)[1:-1],
+                element=quoted(etree.QName(node).localname)[1:-1],
                 count=count,
                 limit=MAX_ATTRIBUTES,
             )
@@ -399,11 +265,6 @@ def _infer_type(feature: str, xmi_type: str, uri: str, attrs: dict[str, str]) ->
     if feature == "subvertex":
         return "Pseudostate" if "kind" in attrs else "State"
     return _DEFAULT_TYPES.get(feature, "")
-
-
-def _line(node: etree._Element) -> int:
-    value: object = node.sourceline  # lxml-stubs type it as `...`
-    return value if isinstance(value, int) else 0
 
 
 def _column(node: etree._Element, line: int, ctx: _Context, local: str | None = None) -> int:
@@ -451,7 +312,7 @@ def _ref_of(node: etree._Element) -> str:
 
 def _stereotype(node: etree._Element, ctx: _Context) -> StereotypeApplication:
     qname = etree.QName(node)
-    line = _line(node)
+    line = node_line(node)
     bases: list[str] = []
     tags: dict[str, str] = {}
     xmi_id = None
