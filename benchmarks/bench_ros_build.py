@@ -8,7 +8,10 @@ a fresh build directory (nothing cached: the whole configure, generate, compile 
 subprocess under `/usr/bin/time -v`: the time is the whole process's wall time, interpreter start
 included, with its user + system CPU and peak memory. `--colcon` also times `colcon build` of the
 whole generated workspace (interfaces + nodes, fresh build and install bases) the same way, as is
-and with the cmake options `build_and_install` uses (`FAST_CMAKE`).
+and with the cmake options `build_and_install` uses (`FAST_CMAKE`). `--replay N` also times
+`swarmgen replay --backend rclpy` of the SAR UAV scenario N times after one warm-up run (which
+builds the interfaces if this venv has not built them yet: its time is kept as `warm_up`); the
+generated node runs on real rclpy and Fast DDS on loopback, in a ROS domain of its own.
 Medians are reported. Writes benchmarks/results/ros_build.json (`-o` to change it).
 """
 
@@ -31,6 +34,8 @@ from typing import Any
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
+SAR_SCENARIO = ROOT / "sample_models" / "sar" / "scenarios" / "uav_mission.json"
+REPLAY_TARGET_S = 10.0  # issue 14: `replay --backend rclpy` after the first build
 RESULTS = HERE / "results" / "ros_build.json"
 GNU_TIME = Path("/usr/bin/time")
 TARGET_S = 15.0  # issue 12: the interface package builds in at most 15 s
@@ -115,11 +120,27 @@ def bench_colcon(workspace: Path, work: Path, runs: int, cmake_args: list[str]) 
     return {"cmake_args": cmake_args, **summary(samples)}
 
 
+def bench_replay(runs: int) -> dict[str, Any]:
+    """`swarmgen replay --backend rclpy` of the SAR UAV scenario: one warm-up, then `runs`."""
+    command = [
+        sys.executable, "-m", "swarmgen", "replay", str(SAR), "--member", "UAV",
+        "--script", str(SAR_SCENARIO), "--backend", "rclpy",
+    ]  # fmt: skip
+    env = {**os.environ, "ROS_AUTOMATIC_DISCOVERY_RANGE": "LOCALHOST"}
+    env.pop("ROS_DOMAIN_ID", None)  # replay leases a domain of its own (swarmgen/ros/domains.py)
+    warm_up = timed(command, env=env)
+    samples = [timed(command, env=env) for _ in range(runs)]
+    return {"scenario": SAR_SCENARIO.name, "target_s": REPLAY_TARGET_S, "warm_up": warm_up,
+            "met": statistics.median(s["wall_s"] for s in samples) <= REPLAY_TARGET_S,
+            **summary(samples)}  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     """Compile SAR, time its interface build (and colcon), print and write the JSON."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--colcon", action="store_true", help="also time `colcon build`")
+    parser.add_argument("--replay", type=int, default=0, metavar="N", help="also time replay")
     parser.add_argument("-o", "--output", type=Path, default=RESULTS)
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory(prefix="swarmgen-bench-ros.") as tmp:
@@ -144,6 +165,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.colcon:
             results["colcon_build"] = bench_colcon(workspace, work, args.runs, [])
             results["colcon_build_fast"] = bench_colcon(workspace, work, args.runs, FAST_CMAKE)
+    if args.replay:
+        results["replay_rclpy"] = bench_replay(args.replay)
     results = {
         "when": datetime.now(UTC).isoformat(timespec="seconds"),
         "machine": {
