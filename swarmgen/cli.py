@@ -50,6 +50,11 @@ COMMANDS: dict[str, Entry] = {
         "Compile MODEL into OUTPUT (SCXML and every backend), replacing it atomically.",
     ),
     "schema": Entry("compile", "schema", "Write the JSON Schema of swarmgen's IR."),
+    "convert": Entry(
+        "convert",
+        "convert",
+        "Write MODEL (any format swarmgen reads) as EMF XMI with the swarm profile applied.",
+    ),
     "replay": Entry(
         "replay",
         "replay",

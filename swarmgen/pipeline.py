@@ -220,3 +220,26 @@ def ir_schema() -> str:
     schema["$id"] = "urn:swarmgen:ir:schema"
     schema["title"] = f"swarmgen IR (swarmgen {__version__.split('.')[0]}.x)"
     return json.dumps(schema, indent=2, sort_keys=True, ensure_ascii=False) + "\n"
+
+
+@dataclass(frozen=True)
+class Conversion:
+    """A validation and, when it is clean of errors, the model written as EMF XMI."""
+
+    validation: Validation
+    xmi: bytes | None  # None when the model has errors
+
+
+def convert_model(path: Path, interfaces: Sequence[Path] = ()) -> Conversion:
+    """Validate the model at `path` (any readable format), then write what was read as EMF XMI
+    with the swarm profile applied (`frontend.xmi_write`). A model with errors is not written:
+    the XMI would carry them into the supported flow."""
+    from swarmgen.frontend.xmi_write import write_xmi
+
+    with _few_collections():
+        validation = _validate(path, interfaces)
+        if validation.model is None or dg.has_errors(validation.diagnostics):
+            return Conversion(validation, None)
+        raw, _ = load(path)  # the same bytes again: the stages keep no raw model
+        assert raw is not None  # it was readable a moment ago
+        return Conversion(validation, write_xmi(raw))
