@@ -99,10 +99,12 @@ FORBIDDEN_XML = register(
 NOT_XMI = register(
     "SG004",
     "not-xmi",
-    "the root element is not XMI or UML",
+    "the root element is not one of a format swarmgen reads",
     input_error=True,
-    message="root element <{tag}> is not xmi:XMI or uml:Model",
-    hint="export the model from Modelio with File > Export > XMI",
+    message="root element <{tag}> is not a model swarmgen reads "
+    "(xmi:XMI, uml:Model, scxml, Modelio EXT)",
+    hint="export the model from Modelio with File > Export > XMI, or give an SCXML document "
+    "or a Modelio .exml/.ramc file",
 )
 TOO_LARGE = register(
     "SG005",

@@ -1,0 +1,285 @@
+"""SCXML executable content, conditions and event descriptors into UML behaviours, guards and
+triggers (the reverse of docs/scxml.md's mapping), with a located diagnostic for the rest."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from lxml import etree
+
+from swarmgen import diagnostics as dg
+from swarmgen.frontend.raw import RawElement
+from swarmgen.frontend.scxml_expr import ExprUnsupported, InState, Marker, conjuncts, translate
+from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, in_sg, local
+from swarmgen.ir import expr
+
+_NOT_IN_IR = {
+    "if": "conditional actions are not in the IR yet",
+    "elseif": "conditional actions are not in the IR yet",
+    "else": "conditional actions are not in the IR yet",
+    "foreach": "loops are not in the IR yet",
+    "log": "logging is not in the IR yet",
+    "script": "scripts other than swarmgen's $sg support script are not run",
+    "cancel": "only the timer pattern's <cancel> (docs/scxml.md) is read",
+    "invoke": "invoking other sessions is not in the IR",
+}
+
+
+@dataclass
+class Actions:
+    """Translates one document's conditions, actions and events (`name`: data id -> name)."""
+
+    b: Builder
+    name: Callable[[str], str]
+    event_name: Callable[[str], str]  # an event's identifier -> its model name
+    event_ref: Callable[[str], str]  # an event's model name -> its SignalEvent's id
+    time_ref: Callable[[int], str]  # a delay in ms -> a TimeEvent's id
+    any_ref: Callable[[], str]  # the AnyReceiveEvent's id
+    behaviours: dict[str, str]  # behaviour name -> operation id
+    language: str  # "ecmascript", "null" or "swarmgen"
+    timers: dict[str, int] = field(default_factory=dict)  # timer event -> delay (ms)
+
+    def text(self, source: str, node: etree._Element) -> str | None:
+        """Model text of an expression, or None (reported)."""
+        try:
+            if self.language == "swarmgen":
+                return expr.to_text(expr.parse_expr(source))
+            return expr.to_text(translate(source, self.name))
+        except (ExprUnsupported, expr.ExprError, ValueError) as err:
+            self.b.report(
+                dg.SCXML_EXPRESSION, node, text=source[:200], why=str(err).splitlines()[0]
+            )
+            return None
+
+    def state_behaviour(self, node: etree._Element, vertex: RawElement) -> str | None:
+        """onentry/onexit into entry/exit behaviours, the sg:call into the doActivity, timers
+        remembered for the transitions. Returns the called behaviour's name."""
+        entry: list[str] = []
+        call: str | None = None
+        for block in children(node, "onentry"):
+            for kid in block.iterchildren(tag=etree.Element):
+                if in_sg(kid) and local(kid) == "call":
+                    call = self.call(kid, vertex)
+                elif in_scxml(kid) and local(kid) == "send" and self.timer(kid):
+                    continue
+                else:
+                    entry.extend(self.action(kid))
+        exit_: list[str] = []
+        for block in children(node, "onexit"):
+            for kid in block.iterchildren(tag=etree.Element):
+                if (
+                    in_scxml(kid)
+                    and local(kid) == "cancel"
+                    and str(kid.get("sendid")) in self.timers
+                ):
+                    continue
+                exit_.extend(self.action(kid))
+        for feature, lines, source in (("entry", entry, "onentry"), ("exit", exit_, "onexit")):
+            if lines:
+                self.body(vertex, feature, lines, children(node, source)[0])
+        return call
+
+    def timer(self, node: etree._Element) -> bool:
+        """`<send event="after.S.n" id=... delay="Nms"/>`: the emitted time-event pattern."""
+        event, delay = str(node.get("event", "")), str(node.get("delay", ""))
+        if not (event.startswith("after.") and node.get("id") == event and delay.endswith("ms")):
+            return False
+        if not delay[:-2].isdigit() or len(node):
+            return False
+        self.timers[event] = int(delay[:-2])
+        return True
+
+    def call(self, node: etree._Element, vertex: RawElement) -> str | None:
+        """The `<sg:call>`: a doActivity calling the library operation, bindings as its body."""
+        behaviour = str(node.get("behaviour", ""))
+        operation = self.behaviours.get(behaviour)
+        if operation is None:
+            self.b.report(
+                dg.SCXML_BAD_DOCUMENT, node, "unknown-target", attribute="behaviour", id=behaviour
+            )
+            return None
+        lines = []
+        for arg in children(node, "arg", sg_ns=True):
+            if arg.get("implicit") == "true":
+                continue
+            value = self.text(str(arg.get("expr", "")), arg)
+            if value is not None:
+                lines.append(f"{arg.get('name')} = {value}")
+        activity = self.b.make(
+            "doActivity",
+            "OpaqueBehavior",
+            vertex,
+            node,
+            {"name": behaviour, "specification": operation},
+        )
+        if lines:
+            self.b.make("body", "", activity, node, text="\n".join(lines))
+        return behaviour
+
+    def body(self, owner: RawElement, feature: str, lines: list[str], node: etree._Element) -> None:
+        """An OpaqueBehavior (entry, exit, effect) with the lines as its body."""
+        language = None
+        if lines and lines[0].startswith("\0"):  # an sg:opaque block: language \0 text
+            language, _, text = lines[0][1:].partition("\0")
+            lines = [text]
+        behaviour = self.b.make(feature, "OpaqueBehavior", owner, node)
+        if language is not None:
+            self.b.make("language", "", behaviour, node, text=language)
+        self.b.make("body", "", behaviour, node, text="\n".join(lines))
+
+    def action(self, node: etree._Element) -> list[str]:
+        """The model-language lines of one executable-content element ([] when reported)."""
+        tag = local(node)
+        if in_sg(node) and tag == "opaque":
+            return [f"\0{node.get('language', '')}\0{node.text or ''}"]
+        if in_sg(node) and tag == "send":
+            return self.event_action(node, "send", children(node, "param", sg_ns=True))
+        if not in_scxml(node):
+            return []  # foreign elements are ignored, as SCXML engines do
+        if tag == "assign":
+            location, value = str(node.get("location", "")), node.get("expr")
+            text = self.text(str(value), node) if value is not None else None
+            if value is None or not location.isidentifier():
+                self.b.report(
+                    dg.SCXML_UNSUPPORTED,
+                    node,
+                    "attribute",
+                    attribute="location",
+                    value=location,
+                    element=tag,
+                    why="swarmgen assigns member data by name, with expr",
+                )
+            return [f"{self.name(location)} = {text}"] if text is not None else []
+        if tag == "raise":
+            return [f"raise {self.event_name(str(node.get('event', '')))}"]
+        if tag == "send":
+            return self.internal_send(node)
+        self.b.report(
+            dg.SCXML_UNSUPPORTED,
+            node,
+            element=tag,
+            why=_NOT_IN_IR.get(tag, "not an action swarmgen reads"),
+        )
+        return []
+
+    def internal_send(self, node: etree._Element) -> list[str]:
+        """`<send target="#_internal">`: a raise with data; any other send is reported."""
+        extra = [
+            a
+            for a in (
+                "delay",
+                "delayexpr",
+                "type",
+                "typeexpr",
+                "targetexpr",
+                "eventexpr",
+                "namelist",
+                "idlocation",
+            )
+            if node.get(a) is not None
+        ]
+        if node.get("target") != "#_internal" or extra or children(node, "content"):
+            why = 'only <send target="#_internal"> with <param>s (a raise with data) and the timer pattern are read'
+            self.b.report(dg.SCXML_UNSUPPORTED, node, element="send", why=why)
+            return []
+        return self.event_action(node, "raise", children(node, "param"))
+
+    def event_action(
+        self, node: etree._Element, verb: str, params: list[etree._Element]
+    ) -> list[str]:
+        """`raise`/`send` of an event with its fields (defaults left to the emitter)."""
+        fields = []
+        for param in params:
+            source = str(param.get("expr", ""))
+            if source.lstrip().startswith(("{", "[")):
+                continue  # a field's default, which the emitter fills in again
+            if param.get("location") is not None:
+                source = str(param.get("location"))
+            value = self.text(source, param)
+            if value is not None:
+                fields.append(f"{param.get('name')} = {value}")
+        event = self.event_name(str(node.get("event", "")))
+        return [f"{verb} {event}({', '.join(fields)})" if fields else f"{verb} {event}"]
+
+    def effect(
+        self, transition: RawElement, node: etree._Element, body: list[etree._Element]
+    ) -> None:
+        """A transition's executable content as its effect."""
+        lines = [line for kid in body for line in self.action(kid)]
+        if any(line.startswith("\0") for line in lines) and len(lines) > 1:
+            self.b.report(
+                dg.SCXML_UNSUPPORTED,
+                node,
+                element="sg:opaque",
+                why="opaque code is read only as a transition's whole effect",
+            )
+            return
+        if lines:
+            self.body(transition, "effect", lines, node)
+
+    def guard(
+        self, transition: RawElement, node: etree._Element, cond: str | None, join: str | None
+    ) -> list[str]:
+        """The guard (an ownedRule); returns the In() states when the transition is a join."""
+        if cond is None:
+            return []
+        try:
+            pieces = (
+                conjuncts(cond, self.name)
+                if self.language != "swarmgen"
+                else [expr.parse_expr(cond)]
+            )
+        except (ExprUnsupported, expr.ExprError, ValueError) as err:
+            self.b.report(dg.SCXML_EXPRESSION, node, text=cond[:200], why=str(err).splitlines()[0])
+            return []
+        states = [p.state for p in pieces if isinstance(p, InState)]
+        if states and join is None:
+            self.b.report(
+                dg.SCXML_UNSUPPORTED,
+                node,
+                "attribute",
+                attribute="cond",
+                value=cond[:200],
+                element="transition",
+                why="In() is read only as a join's sources (sg:join)",
+            )
+            return []
+        terms = [p for p in pieces if not isinstance(p, InState | Marker)]
+        if terms:
+            whole = terms[0]
+            for term in terms[1:]:
+                whole = expr.Binary(op="and", left=whole, right=term)
+            rule = self.b.make("ownedRule", "Constraint", transition, node)
+            self.b.make(
+                "specification", "LiteralString", rule, node, {"value": expr.to_text(whole)}
+            )
+            transition.attrs["guard"] = str(rule.id)
+        return states
+
+    def triggers(
+        self, node: etree._Element, events: list[str], state: str, call: str | None
+    ) -> list[tuple[str, str | None]] | None:
+        """(trigger name, event id) per descriptor; [] for the triggerless forms."""
+        found: list[tuple[str, str | None]] = []
+        triggerless = {f"done.state.{state}", *([f"outcome.{state}"] if call else [])}
+        for event in events:
+            if event in triggerless and len(events) == 1:
+                return []
+            outcome = f"outcome.{state}."
+            if call and event.startswith(outcome):
+                found.append((event[len(outcome) :], None))
+            elif event in self.timers:
+                found.append((event, self.time_ref(self.timers[event])))
+            elif event == "*":
+                found.append(("*", self.any_ref()))
+            elif (
+                event.split(".")[0] in ("done", "error", "outcome", "after") or event in triggerless
+            ):
+                why = "platform events (done.*, error.*) other than swarmgen's own patterns are not in the IR"
+                self.b.report(dg.SCXML_UNSUPPORTED, node, "event", event=event, why=why)
+                return None
+            else:
+                name = self.event_name(event.removesuffix(".*"))
+                found.append((name, self.event_ref(name)))
+        return found

@@ -1,0 +1,278 @@
+"""The ECMAScript subset of SCXML documents, translated into swarmgen's expression language.
+
+What swarmgen's emitter writes (docs/scxml.md) reads back to the expression it came from:
+`$sg.field(_event, "f")` and `_event.data.f` are `event.f`, `$sg.div`/`$sg.mod` are `/` and `%`,
+`===`/`!==` are `==`/`!=`, `&&`/`||`/`!` are `and`/`or`/`not`. Anything else (calls, `typeof`,
+assignment, `_event.name`) is an `ExprUnsupported` for the caller to report where it stands.
+The parser is a hand-written precedence climber over a bounded token list: the text is input.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from swarmgen.ir import expr
+
+MAX_TEXT = expr.MAX_TEXT
+_TOKEN = re.compile(
+    r"""\s*(?:(?P<num>\d+(?:\.\d*)?(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)"""
+    r"""|(?P<str>"(?:[^"\\]|\\.)*"|'(?:[^'\\]|\\.)*')"""
+    r"""|(?P<name>[A-Za-z_$][A-Za-z0-9_$]*)"""
+    r"""|(?P<op>===|!==|==|!=|<=|>=|&&|\|\||[-+*/%<>!(),.\[\]{}:]))"""
+)
+_LEVELS: tuple[dict[str, str], ...] = (  # lowest precedence first: JS operator -> swarmgen's
+    {"||": "or"},
+    {"&&": "and"},
+    {"===": "==", "!==": "!=", "==": "==", "!=": "!="},
+    {"<": "<", "<=": "<=", ">": ">", ">=": ">="},
+    {"+": "+", "-": "-"},
+    {"*": "*", "/": "/", "%": "%"},
+)
+_MARKERS = {"$sg.tick": "tick", "$sg.spin": "spin"}
+
+
+class ExprUnsupported(Exception):
+    """The text is outside the subset; the message says why."""
+
+
+@dataclass(frozen=True)
+class InState:
+    """`In('id')`: a state-configuration test, read as a join's sources (never an expression)."""
+
+    state: str
+
+
+@dataclass(frozen=True)
+class Marker:
+    """`$sg.tick(_event)` or `$sg.spin()`: the step bound's bookkeeping, which the emitter
+    writes again from the model (docs/scxml.md), so the reader drops it."""
+
+    name: str
+
+
+Piece = expr.Expr | InState | Marker
+
+
+def tokens(text: str) -> list[tuple[str, str]]:
+    """(kind, text) of each token; raises ExprUnsupported on anything else."""
+    if len(text) > MAX_TEXT:
+        raise ExprUnsupported(f"longer than {MAX_TEXT} characters")
+    found: list[tuple[str, str]] = []
+    at = 0
+    while at < len(text):
+        if not text[at:].strip():
+            break
+        match = _TOKEN.match(text, at)
+        if match is None or match.end() == at:
+            raise ExprUnsupported(f"unexpected character {text[at:].strip()[:1]!r}")
+        kind = match.lastgroup or "op"
+        found.append((kind, match.group(kind)))
+        at = match.end()
+    return found
+
+
+def conjuncts(text: str, name: Callable[[str], str]) -> list[Piece]:
+    """The `&&`-separated parts of a cond at its top level, each translated (In() and the
+    step bound's markers kept apart)."""
+    parts: list[list[tuple[str, str]]] = [[]]
+    depth = 0
+    for token in tokens(text):
+        depth += {"(": 1, "[": 1, ")": -1, "]": -1}.get(token[1], 0) if token[0] == "op" else 0
+        if depth == 0 and token == ("op", "&&"):
+            parts.append([])
+        else:
+            parts[-1].append(token)
+    if not all(parts):
+        raise ExprUnsupported("an operand of && is missing")
+    return [_Parser(part, name, allow_markers=True).whole() for part in parts]
+
+
+def translate(text: str, name: Callable[[str], str]) -> expr.Expr:
+    """The swarmgen expression of an ECMAScript expression (`name`: data id -> model name)."""
+    found = _Parser(tokens(text), name).whole()
+    assert not isinstance(found, InState | Marker)
+    return found
+
+
+def literal(text: str) -> object:
+    """A JSON-like value (a `<data expr>` or an event field's default): JSON first (what the
+    emitter writes), then a signed literal such as `(-1)`."""
+    try:
+        return json.loads(text)
+    except ValueError:
+        pass
+    found = translate(text, lambda n: n)
+    if isinstance(found, expr.Const):
+        return found.value
+    if isinstance(found, expr.Unary) and isinstance(found.operand, expr.Const):
+        value = found.operand.value
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return -value if found.op == "-" else value
+    raise ExprUnsupported("not a literal value")
+
+
+class _Parser:
+    def __init__(
+        self, toks: list[tuple[str, str]], name: Callable[[str], str], allow_markers: bool = False
+    ) -> None:
+        self.toks, self.at, self.name, self.allow_markers = toks, 0, name, allow_markers
+        self.depth = 0
+
+    def whole(self) -> Piece:
+        found = self.special() if self.allow_markers else None
+        if found is None:
+            found = self.level(0)
+        if self.at != len(self.toks):
+            raise ExprUnsupported(f"unexpected {self.toks[self.at][1]!r}")
+        return found
+
+    def peek(self) -> str:
+        return self.toks[self.at][1] if self.at < len(self.toks) else ""
+
+    def take(self, wanted: str | None = None) -> tuple[str, str]:
+        if self.at >= len(self.toks):
+            raise ExprUnsupported("the expression ends too early")
+        token = self.toks[self.at]
+        if wanted is not None and token[1] != wanted:
+            raise ExprUnsupported(f"expected {wanted!r}, found {token[1]!r}")
+        self.at += 1
+        return token
+
+    def special(self) -> Piece | None:
+        """`In('s')`, `$sg.tick(_event)`, `$sg.spin()` as a whole conjunct."""
+        texts = [t[1] for t in self.toks]
+        is_in = texts[:2] == ["In", "("] and texts[3:] == [")"] and len(texts) == 4
+        if is_in and self.toks[2][0] == "str":
+            self.at = 4
+            return InState(_string(self.toks[2][1]))
+        joined = "".join(texts)
+        for text, marker in _MARKERS.items():
+            if joined in (f"{text}(_event)", f"{text}()"):
+                self.at = len(self.toks)
+                return Marker(marker)
+        return None
+
+    def level(self, index: int) -> expr.Expr:
+        if index == len(_LEVELS):
+            return self.unary()
+        self.depth += 1
+        if self.depth > expr.MAX_DEPTH:
+            raise ExprUnsupported(f"nested deeper than {expr.MAX_DEPTH} levels")
+        left = self.level(index + 1)
+        ops = _LEVELS[index]
+        while self.peek() in ops and self.toks[self.at][0] == "op":
+            op = ops[self.take()[1]]
+            right = self.level(index + 1)
+            left = expr.Binary(op=op, left=left, right=right)
+            if index in (2, 3) and self.peek() in ops:
+                raise ExprUnsupported("comparisons do not chain in swarmgen's language")
+        self.depth -= 1
+        return left
+
+    def unary(self) -> expr.Expr:
+        if self.peek() in ("!", "-", "+") and self.toks[self.at][0] == "op":
+            op = {"!": "not"}.get(self.take()[1], self.toks[self.at - 1][1])
+            self.depth += 1
+            if self.depth > expr.MAX_DEPTH:
+                raise ExprUnsupported(f"nested deeper than {expr.MAX_DEPTH} levels")
+            operand = self.unary()
+            self.depth -= 1
+            return expr.Unary(op=op, operand=operand)
+        return self.postfix(self.primary())
+
+    def primary(self) -> expr.Expr:
+        kind, text = self.take()
+        if kind == "num":
+            number = float(text) if any(c in text for c in ".eE") else int(text)
+            return expr.Const(value=number)
+        if kind == "str":
+            return expr.Const(value=_string(text))
+        if text == "(":
+            inner = self.level(0)
+            self.take(")")
+            return inner
+        if kind == "name":
+            return self.named(text)
+        raise ExprUnsupported(f"unexpected {text!r}")
+
+    def named(self, text: str) -> expr.Expr:
+        constants: dict[str, expr.Value] = {"true": True, "false": False, "null": None}
+        if text in constants:
+            return expr.Const(value=constants[text])
+        if text == "$sg":
+            return self.support_call()
+        if text == "_event":
+            return self.event_field()
+        if text in ("In", "typeof", "new", "function", "this", "undefined"):
+            raise ExprUnsupported(f"{text} is not in the subset")
+        if self.peek() == "(":
+            raise ExprUnsupported(f"calls ({text}(...)) are not in the subset")
+        return expr.Name(name=self.name(text))
+
+    def support_call(self) -> expr.Expr:
+        self.take(".")
+        function = self.take()[1]
+        self.take("(")
+        if function == "field":
+            self.take("_event")
+            self.take(",")
+            kind, text = self.take()
+            self.take(")")
+            if kind != "str":
+                raise ExprUnsupported("$sg.field needs a field name in quotes")
+            return expr.EventField(field=_string(text))
+        if function in ("div", "mod"):
+            left = self.level(0)
+            self.take(",")
+            right = self.level(0)
+            self.take(")")
+            op = "/" if function == "div" else "%"
+            return expr.Binary(op=op, left=left, right=right)
+        raise ExprUnsupported(f"$sg.{function} is only read where the emitter writes it")
+
+    def event_field(self) -> expr.Expr:
+        self.take(".")
+        if self.take()[1] != "data":
+            raise ExprUnsupported("of _event, only _event.data.<field> is supported")
+        return self.member(expr.EventField(field="_"), first=True)
+
+    def member(self, obj: expr.Expr, first: bool = False) -> expr.Expr:
+        if self.peek() == ".":
+            self.take(".")
+            kind, field = self.take()
+            if kind != "name":
+                raise ExprUnsupported("a member name must follow '.'")
+        elif self.peek() == "[":
+            self.take("[")
+            kind, field = self.take()
+            self.take("]")
+            if kind != "str":
+                raise ExprUnsupported('only constant member names (["f"]) are supported')
+            field = _string(field)
+        else:
+            raise ExprUnsupported("_event.data is only read field by field")
+        if first:
+            return self.postfix(expr.EventField(field=field))
+        return expr.Attr(obj=obj, name=field)
+
+    def postfix(self, found: expr.Expr) -> expr.Expr:
+        while self.peek() in (".", "["):
+            found = self.member(found)
+        if self.peek() == "(":
+            raise ExprUnsupported("calls are not in the subset")
+        return found
+
+
+def _string(text: str) -> str:
+    body = text[1:-1]
+    if text[0] == "'":
+        body = body.replace("\\'", "'").replace('"', '\\"')
+    try:
+        value = json.loads(f'"{body}"')
+    except ValueError as err:
+        raise ExprUnsupported(f"bad string literal {text}") from err
+    assert isinstance(value, str)
+    return value
