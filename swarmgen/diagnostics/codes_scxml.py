@@ -6,7 +6,7 @@ Registered after `codes_ros`, in the same `CODES`, the same way. Every one is an
 
 from __future__ import annotations
 
-from swarmgen.diagnostics.codes import M, register
+from swarmgen.diagnostics.codes import NOTE, WARNING, M, register
 
 SCXML_UNSUPPORTED = register(
     "SG060",
@@ -70,4 +70,90 @@ SCXML_DATAMODEL = register(
     hint='use datamodel="ecmascript" (its subset), "null" or "swarmgen"',
 )
 
-__all__ = ["SCXML_BAD_DOCUMENT", "SCXML_DATAMODEL", "SCXML_EXPRESSION", "SCXML_UNSUPPORTED"]
+CPSWARM_INVOKE = register(
+    "SG064",
+    "cpswarm-invoke",
+    "a CPSwarm code-generator state (rosaction, rosservice, rosmonitor) swarmgen cannot read",
+    input_error=True,
+    message='<invoke type="{type}"> in state \'{state}\' has no <data id="invoke"> payload',
+    hint='add <datamodel><data id="invoke"><{payload}>...</{payload}></data></datamodel> '
+    "(docs/scxml-input.md, CPSwarm dialect)",
+    variants={
+        "missing": M(
+            "<{element}> needs <{child}>", "add it (docs/scxml-input.md, CPSwarm dialect)"
+        ),
+        "policy": M(
+            '<{element} type="{value}"> is not one of: {allowed}',
+            "use one of them (docs/scxml-input.md, CPSwarm dialect)",
+        ),
+        "mismatch": M(
+            "<invoke type=\"{type}\"> in state '{state}' holds <{payload}>",
+            "ROS_ACTION holds <rosaction>, ROS_SERVICE <rosservice>, ROS_MONITOR <rosmonitor>",
+        ),
+        "no-invoke": M(
+            "state '{state}' has a <{payload}> payload but no <invoke type=\"{type}\"/>",
+            'add <invoke type="{type}"/> to the state',
+        ),
+        "several": M(
+            "state '{state}' has {count} <invoke> elements; a CPSwarm state calls one interface",
+            "split the state",
+        ),
+    },
+)
+CPSWARM_CAVEAT = register(
+    "SG065",
+    "cpswarm-caveat",
+    "a CPSwarm construct the dialect allows but does not define, read by a documented rule",
+    WARNING,
+    message="{what} '{value}' has no package; read as '{read}'",
+    hint="write the full name (pkg/Name) to choose another package",
+    variants={
+        "legacy": M(
+            "{what} is the 2019 spelling; read as {read}",
+            "write the current form (docs/scxml-input.md, CPSwarm dialect)",
+        ),
+        "mapping": M(
+            "<map> names '{name}', which is no goal, request, result or response var of "
+            "state '{state}'; the mapping is ignored",
+            'list the var in <goal>/<result> (or <request>/<response>) with type="userdata"',
+        ),
+        "outcome": M(
+            "'{state}' waits for outcome '{outcome}', but no state inside it calls a ROS "
+            "action or service that could end with it; the transition is dropped",
+            "move the transition to the state that runs the behaviour",
+        ),
+    },
+)
+CPSWARM_NOTE = register(
+    "SG066",
+    "cpswarm-note",
+    "how swarmgen reads a CPSwarm construct whose meaning lived outside the SCXML",
+    NOTE,
+    message="{element} type=\"callback\" in state '{state}' was user code in the CPSwarm "
+    "tool; swarmgen runs no callback",
+    hint="supply the behaviour through a plug-in (docs/plugins.md)",
+    variants={
+        "declared": M(
+            "'{name}' is not in the document's <datamodel>; declared as member data",
+            'declare it (<data id="{name}" expr=...>) to give it a type and a value',
+        ),
+        "ignored": M(
+            '<data id="{id}"> in a CPSwarm state is not read: {why}',
+            "the ROS interface is the one <rosaction>/<rosservice> names",
+        ),
+        "monitor": M(
+            "the topic '{topic}' raises the event '{event}' ({why})",
+            "name the event on the <parallel>'s transition to choose another",
+        ),
+    },
+)
+
+__all__ = [
+    "CPSWARM_CAVEAT",
+    "CPSWARM_INVOKE",
+    "CPSWARM_NOTE",
+    "SCXML_BAD_DOCUMENT",
+    "SCXML_DATAMODEL",
+    "SCXML_EXPRESSION",
+    "SCXML_UNSUPPORTED",
+]

@@ -15,6 +15,7 @@ from lxml import etree
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic, Severity
+from swarmgen.frontend import scxml_cpswarm
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError
 from swarmgen.frontend.scxml_actions import Actions
@@ -63,6 +64,7 @@ class _Document:
 
     def read(self) -> RawModel:
         root = self.root
+        scxml_cpswarm.lower(self.b, root)  # the CPSwarm dialect into sg: elements, in place
         self.check_elements()
         language = str(root.get("datamodel", "ecmascript"))
         if language not in DATAMODELS:
