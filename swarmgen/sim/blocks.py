@@ -97,3 +97,34 @@ def padded_index(runs: int, geometry: Geometry) -> NDArray[np.signedinteger]:
         rows[:, :, None], np.arange(w, dtype=dtype)[None, None, :]
     )
     return index.ravel()
+
+
+def entering(
+    now: NDArray[np.signedinteger],
+    before: NDArray[np.signedinteger],
+    full: NDArray[np.bool_],
+    geometry: Geometry,
+    view_offsets: NDArray[np.signedinteger],
+) -> NDArray[np.signedinteger]:
+    """The padded patches a step from `before` to `now` (padded flat indices) brings into view:
+    the view around `now` less the view around `before`, whose patches are all seen already (a
+    patch is stood on only with its whole view). Where `full` or the step is not to a
+    neighbour, the whole view. A one-patch step adds one column and/or one row of the view, so
+    this is 3 to 5 patches instead of 9 (the corner may repeat: callers drop repeats)."""
+    v, pw = geometry.view, geometry.width + 2 * geometry.view
+    if v == 0:
+        return now
+    delta = now - before
+    dy = (delta + pw + 1) // pw - 1  # exact for steps to a neighbour (pw >= 3)
+    dx = delta - dy * pw
+    full = full | (np.abs(dx) > 1) | (np.abs(dy) > 1)
+    cols = ~full & (dx != 0)
+    rows = ~full & (dy != 0)
+    span = np.arange(-v, v + 1, dtype=now.dtype)
+    return np.concatenate(
+        [
+            (now[full][:, None] + view_offsets[None, :]).reshape(-1),
+            ((now[cols] + dx[cols] * v)[:, None] + (span * pw)[None, :]).reshape(-1),
+            ((now[rows] + dy[rows] * (v * pw))[:, None] + span[None, :]).reshape(-1),
+        ]
+    )

@@ -33,7 +33,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmgen.sim.blocks import STRETCH, Blocks, padded_index
+from swarmgen.sim.blocks import STRETCH, Blocks, entering, padded_index
 from swarmgen.sim.grid import (
     BLOCK,
     F64,
@@ -226,59 +226,67 @@ class World:
         """Whether the member reports targets in view (monitoring, or a reporting Coverage)."""
         return bool(self.detecting[member] or self.reports[member])
 
-    def _turn(self, g: I64) -> None:
-        """Members whose next step would leave the grid: new origin where they stand, a new
-        random direction that keeps them inside, a new straight segment."""
-        body = self.body[g]
-        s0 = self.seg_end[g]
-        steps = (s0 - self.s0[g]).astype(np.float64)
+    def _turn(self, g: I64, body: F64, s0: I64, seg_end: I64) -> tuple[F64, I64]:
+        """Members whose next step would leave the grid (their body rows, segment origin and
+        end ticks): new origin where they stand, a new random direction that keeps them
+        inside, a new straight segment. Stores and returns the new body rows and end ticks."""
+        steps = (seg_end - s0).astype(np.float64)
         ox = body[:, 0] + steps * body[:, 2]
         oy = body[:, 1] + steps * body[:, 3]
         body[:, 0], body[:, 1] = ox, oy
         todo = np.arange(len(g))
+        gt = g
         for _ in range(16):  # candidates in blocks; the first that keeps the body inside wins
-            gt = g[todo]
             angle = (2.0 * math.pi) * self.uniforms(gt, BLOCK)
             cx, cy = np.cos(angle), np.sin(angle)
             cx += ox[todo, None]
             cy += oy[todo, None]
             ok = self._inside(cx, cy)
             pick = np.argmax(ok, axis=1)
-            rows = np.flatnonzero(ok[np.arange(len(todo)), pick])
+            found = ok[np.arange(len(todo)), pick]
+            used = pick + 1  # only the draws up to the chosen one are used
+            if found.all():  # the usual case: no row to select
+                chosen = angle[np.arange(len(todo)), pick]
+                body[todo, 2], body[todo, 3] = np.cos(chosen), np.sin(chosen)
+                self.consume(gt, used)
+                break
+            rows = np.flatnonzero(found)
             chosen = angle[rows, pick[rows]]
             done = todo[rows]
             body[done, 2], body[done, 3] = np.cos(chosen), np.sin(chosen)
-            used = np.full(len(todo), BLOCK, dtype=np.int64)
-            used[rows] = pick[rows] + 1  # only the draws up to the chosen one are used
+            used[~found] = BLOCK
             self.consume(gt, used)
-            if len(rows) == len(todo):
-                break
-            todo = np.delete(todo, rows)
+            todo = todo[~found]
+            gt = g[todo]
         else:  # vanishingly unlikely: head for the centre
             cx = self.W / 2 - ox[todo]
             cy = self.H / 2 - oy[todo]
             norm = np.hypot(cx, cy)
             body[todo, 2], body[todo, 3] = cx / norm, cy / norm
+        end = seg_end + self._longest(ox, oy, body[:, 2], body[:, 3])
         self.body[g] = body
-        self.s0[g] = s0
-        self.seg_end[g] = s0 + self._longest(ox, oy, body[:, 2], body[:, 3])
+        self.s0[g] = seg_end
+        self.seg_end[g] = end
+        return body, end
 
     def _pieces(self, g: I64, cur: I64, horizon: I64, expand: bool = True) -> Points:
         """Move members `g` from tick `cur` to `horizon` (turning at the boundary as often as
         needed); returns every patch passed, ticks cur+1..horizon."""
         ints: list[tuple[I64, I64, I64, I64]] = []  # member, start tick, steps, segment s0
         floats: list[NDArray[np.float64]] = []  # segment origin and heading (body rows)
+        # the rows of the members still moving, carried from one turn to the next
+        body, s0, seg_end = self.body[g], self.s0[g], self.seg_end[g]
         while g.size:
-            seg_end = self.seg_end[g]
             n = np.minimum(seg_end, horizon) - cur
             if expand:
-                ints.append((g, cur, n, self.s0[g]))
-                floats.append(self.body[g])
+                ints.append((g, cur, n, s0))
+                floats.append(body)
             turning = seg_end < horizon
             if not turning.any():
                 break
             g, horizon, cur = g[turning], horizon[turning], seg_end[turning]
-            self._turn(g)
+            body, seg_end = self._turn(g, body[turning], s0[turning], cur)
+            s0 = cur
         if not ints:
             return Points.empty()
         gm, start, n, s0 = (np.concatenate([p[i] for p in ints]) for i in range(4))
@@ -395,8 +403,18 @@ class World:
         np.minimum.at(self.first, flat, points.tick[new].astype(np.int32))
         # a patch passed twice brings the same view: `distinct` below drops the repeats
         self.stood[flat] = 1
-        padded = self._padded[flat]
-        around = (padded[:, None] + self._view_offsets[None, :]).reshape(-1)
+        # each point's predecessor in its piece stands with its whole view seen (now or
+        # before): only what the step adds can be new; a piece's first point brings its view
+        start = np.zeros(len(points), dtype=np.bool_)
+        start[points.first[points.first < len(points)]] = True
+        start[0] = True
+        around = entering(
+            self._padded[flat],
+            self._padded[points.flat[new - 1]],  # new - 1 == -1 only at a start
+            start[new],
+            self.geometry,
+            self._view_offsets,
+        )
         around = around[self.seen_flag[around] == 0]
         fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh] = 1

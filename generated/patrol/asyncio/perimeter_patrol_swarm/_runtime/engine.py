@@ -21,7 +21,6 @@ from .chart import (
     FINALIZE_PREFIX,
     OUTCOME_PREFIX,
     STEP_BOUND,
-    Call,
     Chart,
     Context,
     Node,
@@ -67,6 +66,7 @@ class Engine:
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
         self._tables: Tables = self.chart.tables
+        self._fillers = self._tables.fillers
         # The interned configuration, None while a microstep changes `config` (or after one
         # was interrupted by an exception): the next selection interns `config` again.
         self._cfg: Configuration | None = None
@@ -99,11 +99,15 @@ class Engine:
         name = event.name
         template = self._events.get(name)
         if template:  # the value rule: a declared field the sender left out holds its default
-            event.data = self._tables.filler(name, template)(event.data)
+            fill = self._fillers.get(name) or self._tables.filler(name, template)
+            event.data = fill(event.data)
         self.ctx.event = event
-        enabled = self._choose((self._cfg or self._configuration()).selection(name))
-        if enabled:
-            self._microstep(enabled)
+        cfg = self._cfg or self._configuration()
+        selection = cfg.selections.get(name) or cfg.selection(name)
+        if selection.chains:
+            enabled = self._choose(selection)
+            if enabled:
+                self._microstep(enabled)
         self._macrostep()
 
     def make_event(
@@ -144,8 +148,11 @@ class Engine:
         """`raise e`: the internal queue. `raise e(f = ...)` carries data, which SCXML can only
         do with `<send target="#_internal">`, and Qt SCXML queues that after the external events
         already waiting: so does swarmgen (docs/semantics.md), through the host's own queue."""
-        if data is None:
-            self.internal.append(self.make_event(name, None, self.member_id, kind="internal"))
+        if data is None:  # `make_event`'s, inlined: an outcome raises one per behaviour's end
+            event = Event(
+                name, None, next(self._ids), self.clock(), self.member_id, None, "internal"
+            )
+            self.internal.append(event)
         else:
             self.host.deliver(self.make_event(name, data, self.member_id, kind="raised"))
 
@@ -156,15 +163,20 @@ class Engine:
     # --- the algorithm
 
     def _macrostep(self) -> None:
+        internal = self.internal
         while self.running:
             cfg = self._cfg or self._configuration()
             enabled = self._choose(cfg.eventless) if cfg.eventless.chains else ()
             if not enabled:
-                if not self.internal:
+                if not internal:
                     break
-                event = self.internal.popleft()
+                event = internal.popleft()
                 self.ctx.event = event
-                enabled = self._choose(cfg.selection(event.name))
+                name = event.name
+                selection = cfg.selections.get(name) or cfg.selection(name)
+                if not selection.chains:
+                    continue
+                enabled = self._choose(selection)
             if enabled:
                 self._microstep(enabled)
         if self._to_invoke:
@@ -172,25 +184,25 @@ class Engine:
 
     def _start_calls(self) -> None:
         invoke = self._to_invoke
-        config, activations = self.config, self._activation
-        for node in tuple(invoke) if len(invoke) == 1 else sorted(invoke, key=document_order):
+        config, activations, ctx, host = self.config, self._activation, self.ctx, self.host
+        for node in (*invoke,) if len(invoke) == 1 else sorted(invoke, key=document_order):
             call = node.call
             if call is not None and node in config:
                 activation = activations.get(node, 0) + 1
                 activations[node] = activation
-                self.host.start_call(node, call, self._arguments(node, call), activation)
+                # A behaviour's inputs. One that cannot be computed is the host's business (the
+                # SCXML document does not evaluate `<sg:arg>`), so it raises no error.execution.
+                try:
+                    args = call.args(ctx)
+                except Exception as err:
+                    args = self._unusable_arguments(node, err)
+                host.start_call(node, call, args if isinstance(args, dict) else {}, activation)
         invoke.clear()
 
-    def _arguments(self, node: Node, call: Call) -> dict[str, Any]:
-        """A behaviour's inputs. An input that cannot be computed is the host's business (the
-        SCXML document does not evaluate `<sg:arg>`), so it raises no error.execution."""
-        try:
-            args = call.args(self.ctx)
-        except Exception as err:
-            if self.on_error is not None:
-                self.on_error(f"arguments of {node.id}", err)
-            return {}
-        return args if isinstance(args, dict) else {}
+    def _unusable_arguments(self, node: Node, err: Exception) -> dict[str, Any]:
+        if self.on_error is not None:
+            self.on_error(f"arguments of {node.id}", err)
+        return {}
 
     def _current_activation(self, origin: tuple[str, int]) -> bool:
         node = self.chart.nodes.get(origin[0])
@@ -202,10 +214,8 @@ class Engine:
         return self._cfg
 
     def _choose(self, selection: Selection) -> tuple[Transition, ...]:
-        """The enabled transitions of a selection, before conflicts are removed: per atomic
-        state in document order, the first enabled one along its chain."""
-        if not selection.chains:
-            return ()
+        """The enabled transitions of a selection (one with chains), before conflicts are
+        removed: per atomic state in document order, the first enabled one along its chain."""
         # The step bound's restart, which the first transition considered triggers.
         if self._bounded and self.ctx.event is not self._input:
             self._restart_count(self.ctx.event)
@@ -255,18 +265,25 @@ class Engine:
         return False
 
     def _microstep(self, enabled: tuple[Transition, ...]) -> None:
-        plan = (self._cfg or self._configuration()).plan(enabled, self.history)
+        cfg = self._cfg or self._configuration()
+        plan = cfg.plans.get(enabled)
+        if plan is None or plan.read:  # one that depends on history: `plan` picks the one
+            plan = cfg.plan(enabled, self.history)
         self._cfg = None
-        if plan.exits:  # history is recorded first, then the states are left in exit order
+        exits = plan.exits
+        if exits:  # history is recorded first, then the states are left in exit order
             if self._to_invoke:
-                self._to_invoke.difference_update(plan.exits)
+                self._to_invoke.difference_update(exits)
             for node, recorded in plan.records:
                 self.history[node] = recorded
             config = self.config
-            for state in plan.exits:
-                if state.call is not None or state.timers or state.onexit is not None:
-                    self._leave(state)
-                config.discard(state)
+            if plan.quiet_exits:  # nothing runs as they are left: no order to keep
+                config.difference_update(exits)
+            else:
+                for state in exits:
+                    if state.call is not None or state.timers or state.onexit is not None:
+                        self._leave(state)
+                    config.discard(state)
         for transition in plan.transitions:
             if transition.action is not None:
                 self._run(transition.action, "transition from", transition.source)
@@ -287,6 +304,10 @@ class Engine:
         """Enter the plan's entry set in document order; the configuration is then its target."""
         self._cfg = None
         config = self.config
+        if plan.entered is not None:  # nothing runs as they are entered: no order to keep
+            config.update(plan.entered)
+            self._cfg = plan.after or self._tables.after(plan)
+            return
         for state, initial, default in plan.entries:
             config.add(state)
             if state.call is not None:  # only these start a behaviour (`_start_calls`)
@@ -301,7 +322,7 @@ class Engine:
                 self._run(default, "history default in", state)
             if state.kind == "final":
                 self._reached_final(state)
-        self._cfg = self._tables.after(plan)
+        self._cfg = plan.after or self._tables.after(plan)
 
     def _reached_final(self, state: Node) -> None:
         parent = state.parent

@@ -229,6 +229,8 @@ class Selection:
             return NO_SELECTION
         chains: list[tuple[Transition | None, Chain]] = []
         for state in atomic:
+            if reactors.keys().isdisjoint(state.lineage):  # most states: at C speed
+                continue
             pairs = tuple((o, reactors[o]) for o in state.lineage if o in reactors)
             if pairs:
                 first = pairs[0][1][0]
@@ -269,6 +271,12 @@ class Plan:
     target: frozenset[Node]  # the configuration after the microstep
     read: tuple[tuple[Node, Sequence[Node] | None], ...]
     other: Plan | None = None  # the plan of the same transitions under other history values
+    # For the engine: whether no exit runs anything (a behaviour, a timer, exit actions), so
+    # the states can leave the configuration at once; the entered states, where no entry runs
+    # anything either (None: the engine enters them one by one, in entry order).
+    quiet_exits: bool = False
+    entered: tuple[Node, ...] | None = None
+    after: Configuration | None = None  # the target's interned configuration, once looked up
 
     def holds(self, history: History) -> bool:
         """Whether the history has the values this plan was computed under."""
@@ -312,7 +320,44 @@ def make_plan(config: frozenset[Node], enabled: Sequence[Transition], history: H
     records = tuple(reads.written.items())
     entry = entry_set(taken, reads)  # sees the history the exits just recorded
     target = config.difference(exits) | entry.to_enter
-    return Plan(taken, exits, records, _entries(entry), target, tuple(reads.read.items()))
+    entries = _entries(entry)
+    read = tuple(reads.read.items())
+    return Plan(
+        taken,
+        exits,
+        records,
+        entries,
+        target,
+        read,
+        None,
+        leaves_quietly(exits),
+        entered_quietly(entries),
+    )
+
+
+def leaves_quietly(exits: Iterable[Node]) -> bool:
+    """Whether leaving these states runs nothing: no behaviour, timer or exit action."""
+    for state in exits:
+        if state.call is not None or state.timers or state.onexit is not None:
+            return False
+    return True
+
+
+def entered_quietly(entries: Iterable[Entry]) -> tuple[Node, ...] | None:
+    """The states of an entry set where entering them runs nothing (None: something runs)."""
+    states = []
+    for state, initial, default in entries:
+        if (
+            state.call is not None
+            or state.onentry is not None
+            or state.timers
+            or state.kind == "final"
+            or initial is not None
+            or default is not None
+        ):
+            return None
+        states.append(state)
+    return tuple(states)
 
 
 def _entries(entry: EntrySet) -> tuple[Entry, ...]:
@@ -342,17 +387,25 @@ class Step:
     scope: Node | None  # its domain: it exits the active states below it (None: all)
     entries: tuple[Entry, ...]
     entered: frozenset[Node]
+    quiet_entries: tuple[Node, ...] | None  # `Plan.entered`
 
     @classmethod
     def of(cls, transition: Transition) -> Step | None:
         """The step of the transition, or None where history decides what it exits or enters."""
         probe = _Reads({})  # records every history node looked up, whatever its value
+        entry = EntrySet(probe)  # `entry_set((transition,), probe)`, its domain computed once
+        for target in transition.targets:
+            entry.add_descendants(target)
         scope = domain(transition, probe)
-        entry = entry_set((transition,), probe)
+        for state in effective_targets(transition, probe):
+            entry.add_ancestors(state, scope)
         if probe.read:
             return None
-        entered = frozenset(entry.to_enter)
-        return cls(transition, bool(transition.targets), scope, _entries(entry), entered)
+        entries = _entries(entry)
+        states = frozenset(entry.to_enter)
+        return cls(
+            transition, bool(transition.targets), scope, entries, states, entered_quietly(entries)
+        )
 
     def plan(self, config: frozenset[Node]) -> Plan:
         """`make_plan(config, (transition,), history)`, for any history."""
@@ -368,7 +421,17 @@ class Step:
             if child.kind == "history"
         )
         target = config.difference(exits) | self.entered
-        return Plan((self.transition,), exits, records, self.entries, target, ())
+        return Plan(
+            (self.transition,),
+            exits,
+            records,
+            self.entries,
+            target,
+            (),
+            None,
+            leaves_quietly(exits),
+            self.quiet_entries,
+        )
 
 
 class Configuration:
@@ -466,9 +529,13 @@ class Tables:
 
     def after(self, plan: Plan) -> Configuration:
         """The configuration the plan leads to. The plan then keeps the interned set of states:
-        the next look-ups find it by identity rather than comparing the sets."""
+        the next look-ups find it by identity rather than comparing the sets, and the plan
+        keeps it (a configuration is valid for ever: past the bound, the plans of the tables
+        started anew lead only to their own, so what the old ones reach is dropped as the
+        engines move on)."""
         found = self.configuration(plan.target)
         plan.target = found.states
+        plan.after = found
         return found
 
     def reactors(self, name: str) -> Reactors:

@@ -450,17 +450,22 @@ class ChartBuilder:
         internal event `outcome.<id>.<outcome>` when the outcome is declared, so guards and
         effects (where `event.<output>` reads the datum) see the new values, whether or not a
         transition takes the outcome."""
-        zeros = {key: self._zero(key) for _, key in call.results}
+        # `fill(given, zero)` per output, its template walked once (this runs per outcome)
+        outputs = tuple((output, key, filler(self._zero(key))) for output, key in call.results)
         prefix = f"{FINALIZE_PREFIX}{node.id}."
-        declared = frozenset(call.outcomes)
+        # the internal event each declared outcome's `done.invoke` name raises
+        raised = {f"{prefix}{o}": f"{OUTCOME_PREFIX}{node.id}.{o}" for o in call.outcomes}
 
         def finalize(ctx: Context) -> None:
-            given = ctx.event_data
-            for output, key in call.results:
-                ctx.data[key] = fill(given.get(output), zeros[key])
-            name = ctx.event.name if ctx.event is not None else ""
-            if name.startswith(prefix) and name[len(prefix) :] in declared:
-                ctx.raise_event(f"{OUTCOME_PREFIX}{node.id}.{name[len(prefix) :]}")
+            event = ctx.event
+            if outputs:
+                data = event.data if event is not None else None
+                given = data if isinstance(data, Record) else Record()
+                for output, key, fill_output in outputs:
+                    ctx.data[key] = fill_output(given.get(output))
+            outcome = raised.get(event.name) if event is not None else None
+            if outcome is not None:
+                ctx.raise_event(outcome)
 
         return Transition(node, (prefix[:-1],), (), action=finalize, order=-1)
 
