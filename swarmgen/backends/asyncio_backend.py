@@ -10,7 +10,7 @@ from swarmgen.backends.pycommon import (
     package_name,
     script_specs,
 )
-from swarmgen.backends.pyrender import ChartRenderer, format_python
+from swarmgen.backends.pyrender import chart_code, format_python
 from swarmgen.chart.model import Chart
 from swarmgen.render import render
 
@@ -40,7 +40,7 @@ __all__ = [
 
 def render_member(chart: Chart, common: dict[str, str]) -> str:
     """A member module: helper functions, then `build()` with the chart's builder calls."""
-    code = ChartRenderer(chart).render()
+    code = chart_code(chart)
     return format_python(render("asyncio/member.py.j2", **member_view(chart, common, code)))
 
 

@@ -26,12 +26,19 @@ def register_laid_out(lines: list[str]) -> None:
     _LAID_HEADS.setdefault(lines[0], set()).add(len(lines))
 
 
+def register_line(line: str) -> None:
+    """Record `line` (indentation included) as a one-line statement, or a `def` header, that
+    black prints as it is at that indentation (`register_laid_out` of one line)."""
+    register_laid_out([line])
+
+
 def laid_out(lines: list[str], start: int) -> int:
     """The number of lines of the recorded statement that begins at `lines[start]`, else 0."""
     counts = _LAID_HEADS.get(lines[start])
     if counts is None:
         return 0
     for count in counts:
-        if "\n".join(lines[start : start + count]) in _LAID_OUT:
+        text = lines[start] if count == 1 else "\n".join(lines[start : start + count])
+        if text in _LAID_OUT:
             return count
     return 0

@@ -11,7 +11,7 @@ import functools
 from dataclasses import dataclass, field
 from typing import Any
 
-from swarmgen.backends import pyformat, pylayout
+from swarmgen.backends import pyformat, pyknown, pylayout
 from swarmgen.chart import model as c
 from swarmgen.ir import expr
 from swarmgen.names import identifier
@@ -67,6 +67,24 @@ class Function:
         return RETURNS[self.kind]
 
 
+def laid_out_function(name: str, kind: str, body: list[str], reads_data: bool) -> Function:
+    """The helper function with its body in black's layout (quotes normalised) when each line
+    is one `pyformat.quick_line` copies, and its lines recorded (`pyknown`) as statements black
+    prints so, one per line, for `pyformat` to copy in every module that prints the function
+    (common/python.j2's `functions`). Else the body as given: pyformat formats it as before."""
+    quick = [pyformat.quick_line("    " + line) for line in body]
+    lines = [line for line in quick if line is not None]
+    if len(lines) < len(body):
+        return Function(name, kind, tuple(body), reads_data)
+    # the header and `d = ctx.data` hold no string and fit: black prints them as they are
+    pyknown.register_line(f"def {name}(ctx: Context) -> {RETURNS[kind]}:")
+    if reads_data:
+        pyknown.register_line("    d = ctx.data")
+    for line in lines:
+        pyknown.register_line(line)
+    return Function(name, kind, tuple(line[4:] for line in lines), reads_data)
+
+
 @dataclass
 class ChartCode:
     """What a template prints for one chart: helper functions, then builder statements."""
@@ -102,6 +120,25 @@ def zeros_literal(chart: c.Chart) -> str | None:
         if py_literal(d.zero) != py_literal(zero_like(d.initial))
     ]
     return "{" + ", ".join(items) + "}" if items else None
+
+
+# The last charts' code by identity (the chart itself kept, so its id is not reused): the asyncio
+# and rclpy members print the same chart's functions and statements, rendered once per compile.
+_SHARED: dict[int, tuple[c.Chart, ChartCode]] = {}
+_SHARED_LIMIT = 16
+
+
+def chart_code(chart: c.Chart) -> ChartCode:
+    """`ChartRenderer(chart).render()`, the same object for the same chart object (shared by the
+    backends that print it as it is: read it, do not change it)."""
+    held = _SHARED.get(id(chart))
+    if held is not None and held[0] is chart:
+        return held[1]
+    if len(_SHARED) >= _SHARED_LIMIT:
+        _SHARED.clear()
+    code = ChartRenderer(chart).render()
+    _SHARED[id(chart)] = (chart, code)
+    return code
 
 
 class ChartRenderer:
@@ -149,7 +186,7 @@ class ChartRenderer:
     def _function(self, kind: str, body: list[str]) -> str:
         self._counter += 1
         name = f"_{kind}_{self._counter}"
-        self.code.functions.append(Function(name, kind, tuple(body), self._reads_data))
+        self.code.functions.append(laid_out_function(name, kind, body, self._reads_data))
         self._reads_data = False
         return name
 

@@ -30,7 +30,7 @@ from xml.sax.saxutils import escape
 
 from swarmgen.backends import Files, pycommon
 from swarmgen.backends.pycommon import common_view, member_view, package_name, script_specs
-from swarmgen.backends.pyrender import ChartRenderer, format_python
+from swarmgen.backends.pyrender import chart_code, format_python
 from swarmgen.backends.pytypes import MODULE, render_types
 from swarmgen.backends.rclpy_declared import (
     Declared,
@@ -454,7 +454,7 @@ def render_member(
     common: dict[str, str],
 ) -> str:
     """A member node module: the chart's code, its behaviours' actions and its parameters."""
-    code = ChartRenderer(chart).render()
+    code = chart_code(chart)
     behaviours = [views[b.name] for b in chart.behaviours]
     reserved = [p for v in behaviours if v.declared and (p := v.declared.timeout_parameter)]
     runs_as = {v.info.name: v.runs_as for v in behaviours}
