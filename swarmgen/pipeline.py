@@ -21,7 +21,7 @@ from swarmgen.chart import checks as chart_checks
 from swarmgen.chart.lower import lower
 from swarmgen.chart.model import Chart
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.frontend import load
+from swarmgen.frontend import RawModel, load
 from swarmgen.generated import header, markdown_cell
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
@@ -91,6 +91,12 @@ def interface_index(path: Path, interfaces: Sequence[Path] = ()) -> InterfaceInd
 
 def _validate(path: Path, interfaces: Sequence[Path] = ()) -> Validation:
     raw, found = load(path)
+    return _validate_loaded(path, raw, found, interfaces)
+
+
+def _validate_loaded(
+    path: Path, raw: RawModel | None, found: list[Diagnostic], interfaces: Sequence[Path]
+) -> Validation:
     if raw is None or dg.has_errors(found):
         return Validation(None, dg.normalise(found))
     model, built = build(raw)
@@ -237,9 +243,8 @@ def convert_model(path: Path, interfaces: Sequence[Path] = ()) -> Conversion:
     from swarmgen.frontend.xmi_write import write_xmi
 
     with _few_collections():
-        validation = _validate(path, interfaces)
-        if validation.model is None or dg.has_errors(validation.diagnostics):
+        raw, found = load(path)
+        validation = _validate_loaded(path, raw, found, interfaces)
+        if raw is None or validation.model is None or dg.has_errors(validation.diagnostics):
             return Conversion(validation, None)
-        raw, _ = load(path)  # the same bytes again: the stages keep no raw model
-        assert raw is not None  # it was readable a moment ago
         return Conversion(validation, write_xmi(raw))

@@ -3,8 +3,6 @@ diagnostics, builds the same IR and compiles to the same SCXML as its source."""
 
 from __future__ import annotations
 
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +12,7 @@ from lxml import etree
 from swarmgen import pipeline
 from swarmgen.frontend import load
 from swarmgen.frontend.xmi_write import write_xmi
-from tests.conftest import ROOT
+from tests.conftest import ROOT, run_cli
 
 SAMPLES = sorted((ROOT / "sample_models").glob("*/*.xmi"))
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
@@ -118,20 +116,14 @@ def test_markup_in_names_cannot_break_the_document(tmp_path: Path) -> None:
     assert raw2 is not None and raw2.roots[0].name == raw.roots[0].name == 'A"</x>&<!--'
 
 
-def _cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "swarmgen", *args], capture_output=True, text=True, check=False
-    )
-
-
 def test_cli_writes_the_file_and_refuses_bad_input_writing_nothing(tmp_path: Path) -> None:
     out = tmp_path / "new" / "model.xmi"
-    done = _cli("convert", str(SAMPLES[0]), "-o", str(out))
+    done = run_cli("convert", str(SAMPLES[0]), "-o", str(out))
     assert done.returncode == 0, done.stderr
     assert out.read_bytes() == pipeline.convert_model(SAMPLES[0], _interfaces(SAMPLES[0])).xmi
     bad = ROOT / "tests" / "fixtures" / "bad" / "wrong_root.xmi"
     refused = tmp_path / "other" / "model.xmi"
-    done = _cli("convert", str(bad), "-o", str(refused))
+    done = run_cli("convert", str(bad), "-o", str(refused))
     assert done.returncode == 2
     assert "SG004" in done.stderr and "nothing written" in done.stderr
     assert "Traceback" not in done.stderr

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import re
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from swarmgen import replay
+from tests.conftest import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 REFERENCE = ROOT.parent / "shared" / "reference" / "cpswarm_models" / "code-generator"
@@ -22,13 +22,7 @@ BACKENDS = ("asyncio", "rclpy", "scxml", "smach")
 
 
 def _compile(model: Path, out: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "swarmgen", "compile", str(model), "-o", str(out)],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        check=False,
-    )
+    return run_cli("compile", str(model), "-o", str(out))
 
 
 def _codes(output: str) -> list[tuple[int, str, str]]:

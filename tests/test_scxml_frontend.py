@@ -5,10 +5,11 @@ the same document (issue 15, items 1 and 2); what the IR cannot express is a loc
 from __future__ import annotations
 
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from tests.conftest import run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = sorted(ROOT.glob("sample_models/*/*.xmi"))
@@ -16,13 +17,7 @@ REFERENCE = ROOT.parent / "shared" / "reference" / "xmi_samples"
 
 
 def _compile(model: Path, out: Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "swarmgen", "compile", str(model), "-o", str(out)],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        check=False,
-    )
+    return run_cli("compile", str(model), "-o", str(out))
 
 
 def _body(text: str) -> list[str]:

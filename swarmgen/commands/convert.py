@@ -1,5 +1,5 @@
-"""`swarmgen convert IN -o model.xmi`: any readable model (XMI, SCXML, the CPSwarm dialect,
-Modelio .exml/.ramc) written as EMF XMI with the swarm profile, for Modelio and for swarmgen."""
+"""`swarmgen convert IN -o model.xmi`: any readable model (XMI, SCXML, the CPSwarm dialect)
+written as EMF XMI with the swarm profile, for Modelio and for swarmgen."""
 
 from __future__ import annotations
 

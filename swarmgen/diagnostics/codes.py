@@ -101,10 +101,8 @@ NOT_XMI = register(
     "not-xmi",
     "the root element is not one of a format swarmgen reads",
     input_error=True,
-    message="root element <{tag}> is not a model swarmgen reads "
-    "(xmi:XMI, uml:Model, scxml, Modelio EXT)",
-    hint="export the model from Modelio with File > Export > XMI, or give an SCXML document "
-    "or a Modelio .exml/.ramc file",
+    message="root element <{tag}> is not a model swarmgen reads (xmi:XMI, uml:Model, scxml)",
+    hint="export the model from Modelio with File > Export > XMI, or give an SCXML document",
 )
 TOO_LARGE = register(
     "SG005",

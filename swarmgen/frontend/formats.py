@@ -1,8 +1,8 @@
 """The input formats, in one table, and `load`: which reader a file goes to is decided by its
-content (a zip's magic number, an XML document's root element), never by its suffix.
+content (an XML document's root element), never by its suffix.
 
 Each reader is named by module and function and imported only when a file needs it, so
-validating an XMI model does not import the SCXML or Modelio readers.
+validating an XMI model does not import the SCXML reader.
 """
 
 from __future__ import annotations
@@ -24,10 +24,8 @@ from swarmgen.span import Span
 
 Loaded = tuple[RawModel | None, list[Diagnostic]]
 TreeReader = Callable[[etree._ElementTree, str, str], Loaded]  # (tree, source text, shown name)
-ArchiveReader = Callable[[bytes, str], Loaded]  # (the archive's bytes, shown name)
 
 SCXML_NAMESPACE = "http://www.w3.org/2005/07/scxml"
-ZIP_MAGIC = b"PK\x03\x04"
 
 
 @dataclass(frozen=True)
@@ -43,19 +41,12 @@ def _is_scxml_root(namespace: str | None, local: str) -> bool:
     return local == "scxml" and namespace in (None, SCXML_NAMESPACE)
 
 
-def _is_exml_root(namespace: str | None, local: str) -> bool:
-    return local == "EXT" and namespace is None
-
-
-# The first format whose `accepts` holds reads the document. Formats whose reader module is not
-# in this installation are skipped (their documents then get SG004, as any unknown root).
+# The first format whose `accepts` holds reads the document; any other root is SG004. (Modelio's
+# native .exml/.ramc files are not read yet: a zip is not XML, so it is SG002.)
 XML_FORMATS: tuple[XmlFormat, ...] = (
     XmlFormat("xmi", is_xmi_root, "swarmgen.frontend.xmi:from_tree"),
     XmlFormat("scxml", _is_scxml_root, "swarmgen.frontend.scxml:from_tree"),
-    XmlFormat("modelio-exml", _is_exml_root, "swarmgen.frontend.modelio:from_tree"),
 )
-# A zip archive (Modelio's .ramc) goes to this reader, when it is present.
-ARCHIVE_READER = "swarmgen.frontend.modelio:from_archive"
 
 
 def load(path: Path) -> Loaded:
@@ -64,10 +55,6 @@ def load(path: Path) -> Loaded:
     shown = str(path)
     try:
         data = read_bounded(path, shown)
-        if data.startswith(ZIP_MAGIC):
-            archive = _reader(ARCHIVE_READER)
-            if archive is not None:
-                return cast(ArchiveReader, archive)(data, shown)
         tree = parse_safely(data, shown)
         read = _tree_reader(tree, shown)
         text = decoded(data, tree.docinfo.encoding or "utf-8", shown)
@@ -81,19 +68,11 @@ def _tree_reader(tree: etree._ElementTree, shown: str) -> TreeReader:
     qname = etree.QName(root)
     for fmt in XML_FORMATS:
         if fmt.accepts(qname.namespace, qname.localname):
-            found = _reader(fmt.reader)
-            if found is not None:
-                return cast(TreeReader, found)
+            return _reader(fmt.reader)
     span = Span(file=shown, line=node_line(root) or 1, col=1)
     raise InputError(dg.NOT_XMI.at(span, tag=root.tag))
 
 
-def _reader(target: str) -> Callable[..., Loaded] | None:
+def _reader(target: str) -> TreeReader:
     module_name, _, function = target.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except ModuleNotFoundError as err:
-        if err.name != module_name:  # the reader exists but something it imports is missing
-            raise
-        return None
-    return cast(Callable[..., Loaded], getattr(module, function))
+    return cast(TreeReader, getattr(importlib.import_module(module_name), function))

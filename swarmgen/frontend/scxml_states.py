@@ -167,14 +167,7 @@ class States:
                 ident,
             )
             self.vertices[ident] = vertex
-            for transition in children(node, "transition"):
-                self.transition(
-                    region,
-                    vertex,
-                    str(transition.get("target", "")).split(),
-                    transition,
-                    body=_body(transition),
-                )
+            self.default_transitions(node, region, vertex)
         elif sg(node, "pseudostate"):
             self.pseudostate(node, region, ident, name, str(sg(node, "pseudostate")))
         else:
@@ -208,14 +201,15 @@ class States:
             "subvertex", "Pseudostate", region, node, {"name": name, "kind": kind}, ident
         )
         self.vertices[ident] = vertex
+        self.default_transitions(node, region, vertex)
+
+    def default_transitions(
+        self, node: etree._Element, region: RawElement, vertex: RawElement
+    ) -> None:
+        """The transitions of an `<initial>` or `<history>` element, from its pseudostate."""
         for transition in children(node, "transition"):
-            self.transition(
-                region,
-                vertex,
-                str(transition.get("target", "")).split(),
-                transition,
-                body=_body(transition),
-            )
+            targets = str(transition.get("target", "")).split()
+            self.transition(region, vertex, targets, transition, body=_body(transition))
 
     def pseudostate(
         self, node: etree._Element, region: RawElement, ident: str, name: str, kind: str
