@@ -12,11 +12,11 @@ from lxml import etree
 from swarmgen import pipeline
 from swarmgen.frontend import load
 from swarmgen.frontend.xmi_write import write_xmi
-from tests.conftest import ROOT, run_cli
+from tests.conftest import ROOT, XMI_SAMPLES, run_cli
 
 SAMPLES = sorted((ROOT / "sample_models").glob("*/*.xmi"))
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
-REFERENCE = ROOT.parent / "shared" / "reference" / "xmi_samples"
+REFERENCE = XMI_SAMPLES
 CLEAN_CASES = sorted((ROOT / "tests" / "check_cases").glob("*.xmi"))
 
 

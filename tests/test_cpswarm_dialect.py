@@ -13,10 +13,11 @@ from typing import Any
 import pytest
 
 from swarmgen import replay
-from tests.conftest import run_cli
+from tests.conftest import REFERENCE as CORPUS
+from tests.conftest import reference_absent, run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
-REFERENCE = ROOT.parent / "shared" / "reference" / "cpswarm_models" / "code-generator"
+REFERENCE = CORPUS / "cpswarm_models" / "code-generator"
 REFERENCE_FILES = sorted(REFERENCE.glob("*/*.xml")) if REFERENCE.is_dir() else []
 BACKENDS = ("asyncio", "rclpy", "scxml", "smach")
 
@@ -31,7 +32,7 @@ def _codes(output: str) -> list[tuple[int, str, str]]:
     return [(int(line), severity, code) for line, severity, code in found]
 
 
-@pytest.mark.skipif(not REFERENCE_FILES, reason="../shared/reference/cpswarm_models is absent")
+@pytest.mark.skipif(not REFERENCE_FILES, reason=reference_absent(REFERENCE))
 @pytest.mark.parametrize(
     "model", REFERENCE_FILES, ids=[f"{p.parent.name}/{p.stem}" for p in REFERENCE_FILES]
 )
@@ -68,7 +69,7 @@ def _leaves(record: dict[str, Any]) -> set[str]:
     return {str(s) for s in active}
 
 
-@pytest.mark.skipif(not FSM2.is_file(), reason="../shared/reference/cpswarm_models is absent")
+@pytest.mark.skipif(not FSM2.is_file(), reason=reference_absent(REFERENCE))
 def test_sar_fsm2_replays_the_same_on_asyncio_and_in_qt() -> None:
     for steps in (MISSION, ABORT):
         ours = replay.replay(FSM2, "sar", steps, "asyncio")
