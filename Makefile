@@ -5,10 +5,11 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 ROS_STAMP := $(VENV)/.ros-installed
+STUDY_STAMP := $(VENV)/.study-installed
 SAMPLES := $(sort $(wildcard sample_models/*/*.xmi))
 SYSTEM_PYTHON := /usr/bin/python3
 
-.PHONY: demo test lint typecheck typecheck-bare pytest generated check-generated golden schema sysdeps ros bench bench-ros clean
+.PHONY: study demo test lint typecheck typecheck-bare pytest generated check-generated golden schema sysdeps ros bench bench-ros clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +24,13 @@ $(ROS_STAMP): $(STAMP) pyproject.toml
 	$(BIN)/pip install --quiet -e '.[ros]'
 	$(BIN)/python -m swarmgen.ros.build --fix-wheels  # the wheels' CMake files, for cmake and colcon
 	touch $(ROS_STAMP)
+
+## study: Dask distributed, optuna and cmaes (sweeps on a cluster, `swarmgen optimize`)
+study: $(STUDY_STAMP)
+
+$(STUDY_STAMP): $(STAMP) pyproject.toml
+	$(BIN)/pip install --quiet -e '.[study]'
+	touch $(STUDY_STAMP)
 
 # Qt SCXML (system python3 + PySide2) is the independent engine the tests run our SCXML in;
 # cmake and a C++ compiler build the generated ROS 2 interface packages (Ninja builds them faster).
@@ -60,7 +68,7 @@ lint: $(STAMP)
 	$(BIN)/ruff check swarmgen tests $(wildcard benchmarks)
 	$(BIN)/ruff format --check swarmgen tests $(wildcard benchmarks)
 
-typecheck: $(STAMP) $(ROS_STAMP)  # rclpy typed: the ROS runtime subclasses its Node
+typecheck: $(STAMP) $(ROS_STAMP) $(STUDY_STAMP)  # rclpy typed: the ROS runtime subclasses its Node
 	$(BIN)/mypy
 
 ## typecheck-bare: mypy as a user's venv without the `ros` extra has it (kept under .venv/)
@@ -72,7 +80,7 @@ typecheck-bare: pyproject.toml
 
 # Everything the tests use is installed above, so nothing may be skipped but the tests over the
 # reference corpus when it is absent (tests/skips.py; SWARMGEN_REFERENCE_DIR points to it).
-pytest: $(STAMP) $(ROS_STAMP) sysdeps
+pytest: $(STAMP) $(ROS_STAMP) $(STUDY_STAMP) sysdeps
 	SWARMGEN_STRICT_SKIPS=1 $(BIN)/pytest -q
 
 ## golden: rewrite the golden files after reviewing the diff
