@@ -67,6 +67,7 @@ def files(tmp: Path) -> tuple[Path, Path, Path]:
         "targets": [{"id": 5, "x": 2.0, "y": 6.0}],
         "stop": {"all_rescued": True, "time_s": 60.0},
         "settle_reporters": 1, "settle_s": 0.25, "step_timeout_s": 5.0,
+        "status_readers": 1,  # the member: it ends on the final status, so it must be matched
         "output": "result.json",
     }  # fmt: skip
     members = [("uav_1", "uav", UAV), ("ugv_1", "ugv", UGV)]
@@ -124,7 +125,7 @@ def test_coverage_finds_the_target_and_the_ugv_rescues_it(runs: list[Run]) -> No
     code, err, result, member = runs[0]
     assert code == 0, err[-3000:]
     assert result["complete"] and result["reason"] == "all_rescued"
-    faults = ("timeouts", "report_timeouts", "stale", "bad_messages")
+    faults = ("timeouts", "report_timeouts", "stale", "bad_messages", "status_unmatched")
     assert {f: result[f] for f in faults} == dict.fromkeys(faults, 0)
     assert result["unserved"] == []
     # TakeOff from step 0 at 1 m/s: z = 0.125 k, blind below 0.5 m (a camera on the ground

@@ -48,6 +48,7 @@ def world_file(tmp: Path, **over: Any) -> Path:
         "stop": {"time_s": 10.0},
         "output": "result.json",
         "start_timeout_s": 20,
+        "status_readers": 1,  # the driver: the tests read its record of the final status
     }  # fmt: skip
     config.update(over)
     path = tmp / "world.json"
@@ -152,6 +153,26 @@ def test_sigterm_writes_a_partial_result(tmp_path: Path) -> None:
     assert driver_out["final"]["final"] is True  # the driver heard the end
 
 
+def test_a_status_reader_that_never_comes_is_counted_not_waited_for_forever(
+    tmp_path: Path,
+) -> None:
+    """Nobody subscribes to /world/status: the start waits start_timeout_s for the reader (and
+    the robot's server), the end waits a bounded time, and the result says one was missed."""
+    world = world_file(tmp_path, start_timeout_s=1.0, stop={"time_s": 0.5})
+    env = harness.ros_env(tmp_path / "roslog", domain_id=DOMAIN, python_path=[LIBRARY, ROOT])
+    node = rosproc.start([sys.executable, "-m", "swarmgen_library.world_node", str(world)],
+                         env, tmp_path, 60)  # fmt: skip
+    try:
+        code, _, err = rosproc.finish(node, 50)
+    finally:
+        if node.poll() is None:
+            rosproc.stop(node, 10)
+    assert code == 0, err[-2000:]
+    result = json.loads((tmp_path / "result.json").read_text())
+    assert result["complete"] and result["steps"] == 4 and result["unserved"] == ["uav_1"]
+    assert result["status_unmatched"] == 1
+
+
 def test_step_reports_and_settling(tmp_path: Path) -> None:
     world = world_file(tmp_path, settle_reporters=1, settle_s=0.4, stop={"time_s": 1.25})
     driver = {"robots": ["uav_1"], "dt": 0.125, "velocity": [1.0, 0.0, 0.0], "report": True,
@@ -174,6 +195,7 @@ def test_step_reports_and_settling(tmp_path: Path) -> None:
         ({"cell": 3}, "world: cell 3.0 does not divide the area side 10.0"),
         ({"cmd_type": "twist"}, "cmd_type: must be 'twist_stamped', got 'twist'"),
         ({"airborne_z": -0.5}, "airborne_z: must be >= 0, got -0.5"),
+        ({"status_readers": -1}, "status_readers: must be an integer >= 0, got -1"),
     ],
 )
 def test_a_bad_world_file_is_one_line_and_exit_2(
@@ -216,7 +238,8 @@ def test_a_file_that_is_not_json(tmp_path: Path) -> None:
 
 
 def test_a_dead_driver_costs_one_timeout_then_its_robot_is_unserved(tmp_path: Path) -> None:
-    world = world_file(tmp_path, step_timeout_s=0.5, stop={"time_s": 2000.0})
+    # no status reader: the killed driver's would be missed at the end (and 5 s waited for)
+    world = world_file(tmp_path, step_timeout_s=0.5, stop={"time_s": 2000.0}, status_readers=0)
     env = harness.ros_env(tmp_path / "roslog", domain_id=DOMAIN, python_path=[LIBRARY, ROOT])
     driver_cfg = tmp_path / "driver.json"
     driver_cfg.write_text(json.dumps({"out": str(tmp_path / "driver_out.json"), "robots": ["uav_1"],

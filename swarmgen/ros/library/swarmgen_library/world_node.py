@@ -126,12 +126,12 @@ class WorldNode:
         return True
 
     def wait_start(self) -> None:
-        """Wait until every robot's server and every reporter is there (or the start timeout):
-        the robots still missing then start unserved."""
+        """Wait until every robot's server, every reporter and every status reader is there (or
+        the start timeout): the robots still missing then start unserved."""
 
         def ready() -> bool:
             return (not self._missing() and self._live_reporters() >= self.reporters
-                    and self._counted_topics_matched())  # fmt: skip
+                    and self._counted_topics_matched() and self._status_readers_matched())  # fmt: skip
 
         self.spin_until(ready, self.config.start_timeout_s)
         self.run.unserved = set(self._missing())
@@ -155,6 +155,18 @@ class WorldNode:
         if self.probe_pub.get_subscription_count() < len(self.config.reporters):
             return False  # a reporter that misses the first probe would not answer step 0
         return all(p.get_subscription_count() > 0 for *_, pubs in self.outputs for p in pubs[1:])
+
+    def _status_readers_matched(self) -> bool:
+        return self.status_pub.get_subscription_count() >= self.config.status_readers
+
+    def status_unmatched(self) -> int:
+        """How many of the world file's status readers the final status would miss, after
+        waiting (bounded) for the late ones: DDS discovers them in its own threads, so nothing
+        is spun and no message is handled after the last step."""
+        deadline = time.monotonic() + (FINAL_ACK_S if self.signalled is None else 0.0)
+        while not self._status_readers_matched() and time.monotonic() < deadline:
+            time.sleep(POLL_S)
+        return max(0, self.config.status_readers - self.status_pub.get_subscription_count())
 
     def _served(self, robot: str) -> bool:
         return self.node.count_publishers(self.cmd_topics[robot]) > 0
@@ -274,6 +286,7 @@ class WorldNode:
     def result(self, reason: str, wall_s: float) -> dict[str, Any]:
         """The run's result, with the barrier's timeouts (and, timing only, its waves)."""
         result = self.run.result(reason, wall_s)
+        result["status_unmatched"] = self.status_unmatched()
         if self.barrier is not None:
             result["barrier_timeouts"] = self.barrier.timeouts
             result["wall"]["waves"] = self.barrier.waves  # how many depends on timing

@@ -56,6 +56,7 @@ class WorldFile:
     start_timeout_s: float = 30.0
     settle_s: float = 0.05
     settle_reporters: int = 0
+    status_readers: int = 0  # `/world/status` subscribers the start and the final status wait for
     status_every: int = 10
     sample_every: int = 1
     executor: str = "events"
@@ -131,6 +132,7 @@ def parse(raw: Any, base: Path = Path(".")) -> WorldFile:
         start_timeout_s=top.number("start_timeout_s", 30.0, positive=True),
         settle_s=top.number("settle_s", 0.05, low=0.0),
         settle_reporters=top.integer("settle_reporters", 0, low=0),
+        status_readers=top.integer("status_readers", 0, low=0),
         status_every=top.integer("status_every", 10, low=1),
         sample_every=top.integer("sample_every", 1, low=1),
         executor=_choice(top.raw, "executor", ("events", "single")),
