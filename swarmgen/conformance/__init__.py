@@ -1,0 +1,1 @@
+"""W3C SCXML IRP conformance harness (not imported by the compiler)."""
