@@ -137,6 +137,28 @@ BAD = {
         2,
     ),
     "xpath": (_doc('<state id="A"/>', "xpath"), "SG063", 1),
+    "member-not-identifier": (
+        _doc(
+            '<state id="A"><transition event="e" cond="_event.data[\'a b\'] &gt; 1" target="A"/></state>'
+        ),
+        "SG062",
+        2,
+    ),
+    "increment": (
+        _doc(
+            '<datamodel><data id="x" expr="0"/></datamodel>\n'
+            '<state id="A"><onentry><assign location="x" expr="++x"/></onentry></state>'
+        ),
+        "SG062",
+        3,
+    ),  # fmt: skip
+    "late-binding": (
+        _doc('<state id="A">\n<datamodel><data id="x" expr="1"/></datamodel></state>').replace(
+            'initial="A"', 'initial="A" binding="late"'
+        ),
+        "SG060",
+        3,
+    ),
 }
 
 
@@ -150,3 +172,29 @@ def test_bad_documents_are_located_errors(case: str, tmp_path: Path) -> None:
     assert f"bad.scxml:{line}:" in result.stderr + result.stdout
     assert f"[{code}]" in result.stderr + result.stdout
     assert not (tmp_path / "out").exists()
+
+
+def test_a_states_datamodel_is_member_data_with_early_binding(tmp_path: Path) -> None:
+    source = tmp_path / "nested.scxml"
+    source.write_text(_doc('<state id="A">\n<datamodel><data id="x" expr="7"/></datamodel>\n'
+                           '<transition event="e" cond="x == 7" target="B"/></state>\n'
+                           '<state id="B"/>'))  # fmt: skip
+    result = _compile(source, tmp_path / "out")
+    assert result.returncode == 0, result.stdout + result.stderr
+    text = (tmp_path / "out" / "scxml" / "M.scxml").read_text()
+    assert '<data id="x" expr="7" sg:type="Integer"/>' in text
+
+
+def test_an_eventless_transition_of_a_parallel_state_is_not_its_completion(tmp_path: Path) -> None:
+    """SCXML takes it at once; UML would wait for the regions' finals (done.state)."""
+    source = tmp_path / "eventless.scxml"
+    source.write_text(_doc('<parallel id="A"><transition target="B"/>\n'
+                           '<state id="A1"/><state id="A2"/></parallel>\n<state id="B"/>'))  # fmt: skip
+    result = _compile(source, tmp_path / "out")
+    assert result.returncode == 0, result.stdout + result.stderr
+    text = (tmp_path / "out" / "scxml" / "M.scxml").read_text()
+    assert "done.state.A" not in text
+    assert '<transition target="B"/>' in text
+    again = _compile(tmp_path / "out" / "scxml" / "M.scxml", tmp_path / "again")
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert _body((tmp_path / "again" / "scxml" / "M.scxml").read_text()) == _body(text)

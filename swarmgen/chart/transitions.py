@@ -88,7 +88,7 @@ class Transitions(Context):
                     self._descriptor(t, transition, sid, copy) for t in transition.triggers
                 )
             )
-        if not isinstance(source, State) or transition.source != source.id:
+        if transition.eventless or not isinstance(source, State) or transition.source != source.id:
             return ()
         if source.activity is not None and not source.regions and not source.submachine:
             return (f"outcome.{sid}",)

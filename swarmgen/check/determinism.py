@@ -151,7 +151,7 @@ def check_determinism(model: Model) -> list[Diagnostic]:
 
 def _trigger_keys(transition: Transition) -> list[str]:
     if not transition.triggers:
-        return ["(completion)"]
+        return ["(eventless)" if transition.eventless else "(completion)"]
     keys = []
     for trigger in transition.triggers:
         if trigger.kind == TriggerKind.TIME:
@@ -272,7 +272,7 @@ def _pair_diagnostic(finding: _Finding, what: str) -> Diagnostic:
 
 
 def _triggers(keys: list[str]) -> str:
-    shown = ["(no trigger)" if k == "(completion)" else f"'{k}'" for k in keys[:3]]
+    shown = ["(no trigger)" if k in ("(completion)", "(eventless)") else f"'{k}'" for k in keys[:3]]
     if len(keys) > 3:
         return ", ".join(shown) + f" and {len(keys) - 3} more triggers"
     return " and ".join(shown) if len(shown) < 3 else f"{shown[0]}, {shown[1]} and {shown[2]}"

@@ -59,7 +59,7 @@ def check_unhandled_outcomes(model: Model) -> list[Diagnostic]:
             if not isinstance(state, State) or state.activity is None:
                 continue
             transitions = leaving.get(state.id, [])
-            if any(not t.triggers for t in transitions):
+            if any(not t.triggers and not t.eventless for t in transitions):
                 continue  # a completion transition handles every outcome
             handled = {
                 tr.name for t in transitions for tr in t.triggers if tr.kind == TriggerKind.OUTCOME

@@ -249,7 +249,7 @@ class _Run:
         if transition.triggers:
             return False
         vertex = self.placed[transition.source].vertex
-        if isinstance(vertex, Pseudostate):
+        if isinstance(vertex, Pseudostate) or transition.eventless:
             return True
         return isinstance(vertex, State) and not (
             vertex.regions or vertex.submachine or vertex.activity
@@ -258,7 +258,7 @@ class _Run:
     def _matches(self, transition: Transition, owner: str, event: str) -> bool:
         if not transition.triggers:
             vertex = self.placed[owner].vertex
-            return isinstance(vertex, State) and bool(vertex.regions) and event == _done(owner)
+            return not transition.eventless and isinstance(vertex, State) and bool(vertex.regions) and event == _done(owner)
         for trigger in transition.triggers:
             if trigger.kind == TriggerKind.ANY:
                 return True

@@ -207,11 +207,25 @@ class _Document:
                 return type_name
         return None
 
-    def data_nodes(self) -> list[etree._Element]:
-        return [d for block in children(self.root, "datamodel") for d in children(block, "data")]
+    def data_nodes(self, report: bool = False) -> list[etree._Element]:
+        """Every `<data>` of the document: with early binding (SCXML's default) a state's
+        `<datamodel>` is created and initialised at the start like the top one, so it is read
+        as member data; late binding (values set when the state is first entered) is refused."""
+        late = self.root.get("binding") == "late"
+        found = []
+        for block in self.root.iter(tag=etree.Element):
+            if local(block) != "datamodel" or not in_scxml(block):
+                continue
+            if late and block.getparent() is not self.root:
+                if report:
+                    self.b.report(dg.SCXML_UNSUPPORTED, block, element="datamodel",
+                                  why='binding="late" (a state\'s data set on its first entry)')  # fmt: skip
+                continue
+            found.extend(children(block, "data"))
+        return found
 
     def datamodel(self, owner: RawElement) -> None:
-        for data in self.data_nodes():
+        for data in self.data_nodes(report=True):
             ident = str(data.get("id", ""))
             if data.get("src") is not None or len(data) or (data.text or "").strip():
                 self.b.report(

@@ -21,7 +21,7 @@ _TOKEN = re.compile(
     r"""\s*(?:(?P<num>\d+(?:\.\d*)?(?:[eE][+-]?\d+)?|\.\d+(?:[eE][+-]?\d+)?)"""
     r"""|(?P<str>"(?:[^"\\]|\\.)*"|'(?:[^'\\]|\\.)*')"""
     r"""|(?P<name>[A-Za-z_$][A-Za-z0-9_$]*)"""
-    r"""|(?P<op>===|!==|==|!=|<=|>=|&&|\|\||[-+*/%<>!(),.\[\]{}:]))"""
+    r"""|(?P<op>\+\+|--|===|!==|==|!=|<=|>=|&&|\|\||[-+*/%<>!(),.\[\]{}:]))"""
 )
 _LEVELS: tuple[dict[str, str], ...] = (  # lowest precedence first: JS operator -> swarmgen's
     {"||": "or"},
@@ -31,6 +31,7 @@ _LEVELS: tuple[dict[str, str], ...] = (  # lowest precedence first: JS operator 
     {"+": "+", "-": "-"},
     {"*": "*", "/": "/", "%": "%"},
 )
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _MARKERS = {"$sg.tick": "tick", "$sg.spin": "spin"}
 
 
@@ -69,6 +70,8 @@ def tokens(text: str) -> list[tuple[str, str]]:
         if match is None or match.end() == at:
             raise ExprUnsupported(f"unexpected character {text[at:].strip()[:1]!r}")
         kind = match.lastgroup or "op"
+        if match.group(kind) in ("++", "--"):  # JS's increment, not two signs: an assignment
+            raise ExprUnsupported("increment and decrement (++, --) change data: use <assign>")
         found.append((kind, match.group(kind)))
         at = match.end()
     return found
@@ -254,6 +257,8 @@ class _Parser:
             field = _string(field)
         else:
             raise ExprUnsupported("_event.data is only read field by field")
+        if not _IDENT.fullmatch(field):
+            raise ExprUnsupported(f"member name {field!r} is not an identifier")
         if first:
             return self.postfix(expr.EventField(field=field))
         return expr.Attr(obj=obj, name=field)

@@ -321,6 +321,10 @@ class States:
             transition.attrs["kind"] = "local" if targets else "internal"
         if transition is not None and not targets:
             transition.attrs["kind"] = "internal"
+        if transition is not None and not events and (call or _compound(node.getparent())):
+            # SCXML takes it as soon as its cond holds; without the mark, UML would read a
+            # composite's (or a behaviour's) untriggered transition as its completion
+            transition.attrs["eventless"] = "true"
 
     def transition(
         self,
@@ -426,3 +430,11 @@ def _root_initial(node: etree._Element, ident: str) -> bool:
         and sg(node, "name") is None
         and not children(node, *_STATES, "onentry", "onexit")
     )
+
+
+def _compound(state: etree._Element | None) -> bool:
+    """A `<state>` with child states, or a `<parallel>`: UML's composite state."""
+    if state is None:
+        return False
+    kids = {local(k) for k in state if isinstance(k.tag, str)}
+    return local(state) == "parallel" or bool(kids & {"state", "parallel", "final"})

@@ -69,6 +69,7 @@ def read_transition(b: Builder, element: RawElement, ctx: MachineContext) -> Tra
         effect=actions_of(b, element.first("effect"), "effect", opaque),
         opaque=tuple(opaque),
         kind=_transition_kind(b, element),
+        eventless=element.attrs.get("eventless") == "true",
         span=element.span,
     )
 

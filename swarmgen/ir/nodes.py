@@ -299,6 +299,10 @@ class Transition(Node):
     effect: tuple[Action, ...] = ()
     opaque: tuple[OpaqueCode, ...] = ()
     kind: Literal["external", "internal", "local"] = "external"
+    # an SCXML eventless transition out of a composite state or a behaviour's state: taken as
+    # soon as its guard holds, not at the completion UML gives an untriggered one (only the
+    # SCXML reader sets it; XMI spells it `eventless="true"`, docs/scxml-input.md)
+    eventless: bool = False
     span: Span
 
 
