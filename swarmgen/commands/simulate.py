@@ -14,6 +14,7 @@ from swarmgen import console
 from swarmgen.commands.common import MODEL, PATH, check_record, guarded, record_options
 
 if TYPE_CHECKING:
+    from swarmgen.sim.params import Variant
     from swarmgen.sim.scenario import Scenario
 
 # The pipeline and the diagnostics are imported in the command functions: `swarmgen --help` and
@@ -43,6 +44,21 @@ if TYPE_CHECKING:
     "-o", "--output", type=PATH,
     help="Write tables (CSV), results.json and figures (PNG, SVG) here, replaced atomically.",
 )  # fmt: skip
+@click.option(
+    "--param", "param", multiple=True, metavar="NAME=V1,V2,...|NAME=START:STOP:STEP",
+    help="Sweep a parameter (repeatable; every combination): UAV.count, UAV.data.NAME, targets, "
+    "seed, world.view, timing.KEY, placement.TYPE.spacing, ...; see docs/simulate.md.",
+)  # fmt: skip
+@click.option(
+    "--sweep", "sweep_file", type=PATH,
+    help="A sweep file (JSON, or TOML by extension): {\"factorial\": {NAME: [values]}} and/or "
+    "{\"design\": [{NAME: value, ...}, ...]}.",
+)  # fmt: skip
+@click.option(
+    "--cluster", metavar="tcp://HOST:PORT|local:N",
+    help="Run on a Dask scheduler (or local:N, a local Dask cluster of N worker processes); "
+    "the same seed gives the same files as local runs.",
+)  # fmt: skip
 @record_options(
     "Also write one ROS 2 bag per run, DIR/<configuration>-<rep>, into this new directory."
 )
@@ -67,6 +83,9 @@ def simulate(
     reps: int | None,
     seed: int | None,
     workers: int,
+    param: tuple[str, ...],
+    sweep_file: Path | None,
+    cluster: str | None,
     output: Path | None,
     record: Path | None,
     storage: str,
@@ -81,9 +100,10 @@ def simulate(
     check_record(record)
     if level == "abstract" and keep_runs is not None:
         raise click.UsageError("--keep-runs is for --level detailed")
+    _check_study_options(level, param, sweep_file, cluster, workers, record)
     started = time.perf_counter()
     chosen = _sweep(scenario, members, targets, reps, seed)
-    _check_sweep(model, chosen)
+    variants = _check_sweep(model, chosen, param, sweep_file)
     progress = _ProgressBar(started)
     if level == "detailed":
         from swarmgen.sim.detailed.main import simulate_detailed
@@ -92,9 +112,19 @@ def simulate(
             model, chosen, output, workers, progress, keep_runs, record, storage
         )
     else:
-        sim, files = sim_run.simulate_model(
-            model, chosen, output, workers, progress, record, storage
-        )
+        executor = None
+        if cluster is not None:  # Dask is imported only here
+            from swarmgen.sim.executors import connect
+
+            executor = connect(cluster)
+        try:
+            sim, files = sim_run.simulate_model(
+                model, chosen, output, workers, progress, record, storage,
+                variants=variants, executor=executor,
+            )  # fmt: skip
+        finally:
+            if executor is not None:
+                executor.close()
     if output is None:
         _print_tables(files)
     errors = sum(len(r.errors) for r in sim.runs)
@@ -164,15 +194,60 @@ class _ProgressBar:
             sys.stderr.flush()
 
 
-def _check_sweep(model: Path, chosen: Scenario) -> None:
-    """The sweep's limits and the member types of --members, before anything runs (a model
-    with errors is reported by the simulation itself)."""
+def _check_study_options(
+    level: str, param: tuple[str, ...], sweep_file: Path | None, cluster: str | None,
+    workers: int, record: Path | None,
+) -> None:  # fmt: skip
+    """--param, --sweep and --cluster: only at the abstract level, without --workers/--record."""
+    if level == "detailed" and (param or sweep_file is not None or cluster is not None):
+        raise click.UsageError("--param, --sweep and --cluster are for --level abstract")
+    if cluster is not None and workers > 1:
+        raise click.UsageError("--workers is for local runs; a --cluster has its own workers")
+    if cluster is not None and record is not None:
+        raise click.UsageError("--record writes on this machine: it cannot go with --cluster")
+
+
+def _check_sweep(
+    model: Path, chosen: Scenario, param: tuple[str, ...], sweep_file: Path | None
+) -> list[Variant] | None:
+    """The sweep's limits, the member types of --members and every point of --param/--sweep,
+    before anything runs (a model with errors is reported by the simulation itself)."""
     from swarmgen import diagnostics as dg
     from swarmgen import pipeline
     from swarmgen.ir.query import composition
+    from swarmgen.sim import params
     from swarmgen.sim import scenario as sim_scenario
+    from swarmgen.sim.limits import MAX_RUNS
 
+    axes = [params.parse_option(item) for item in param]
+    rows = params.load_file(sweep_file) if sweep_file is not None else [()]
+    points = params.product(axes, rows) if axes or sweep_file is not None else None
     validation = pipeline.validate(model)
-    if validation.model is not None and not dg.has_errors(validation.diagnostics):
-        types = [t.name for t in validation.model.member_types if t.machine]
-        sim_scenario.check(chosen, types, composition(validation.model))
+    if validation.model is None or dg.has_errors(validation.diagnostics):
+        return None if points is None else []  # refused, with its diagnostics, by the run
+    types = [t.name for t in validation.model.member_types if t.machine]
+    defaults = composition(validation.model)
+    sim_scenario.check(chosen, types, defaults)
+    if points is None:
+        return None
+    where = console.shown(sweep_file) if sweep_file is not None else "--param"
+    names = params.names_of(validation.model, validation.charts)
+    variants = params.variants(chosen, points, names, where)
+    for variant in variants:
+        sim_scenario.check(variant.scenario, types, defaults)
+    runs = len(variants) * _runs(chosen, types, defaults)
+    if runs > MAX_RUNS:
+        raise params.ParamError(
+            f"{runs:,} runs ({len(variants):,} sweep points): more than the limit of "
+            f"{MAX_RUNS:,} (docs/simulate.md)"
+        )
+    return variants
+
+
+def _runs(chosen: Scenario, types: list[str], defaults: dict[str, int]) -> int:
+    """Runs of one sweep point, at most: its member sweeps x target counts x repetitions."""
+    sizes = [len(s) for k in types if isinstance(s := chosen.members.get(k), list)]
+    combos = 1
+    for size in sizes:
+        combos *= size
+    return combos * len(chosen.targets) * chosen.reps

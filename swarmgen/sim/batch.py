@@ -30,6 +30,7 @@ import copy
 import heapq
 import itertools
 import math
+import re
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -52,6 +53,7 @@ if TYPE_CHECKING:
     from swarmgen.trace.recorder import BagRecorder
 
 POINTS_PER_ROUND = 1_000_000  # positions computed per round at most (memory bound)
+_SLUG = re.compile(r"[^A-Za-z0-9.-]")
 MIN_CHUNK = 256
 EVENTS_PER_TICK = 200_000  # more events than this in one tick of one run: a livelock
 
@@ -64,15 +66,20 @@ class Config:
 
     counts: tuple[tuple[str, int], ...]  # (member type, count) in model order
     targets: int
+    # the swept parameters other than counts and targets (`sim.params`), in sweep order; they
+    # do not key the random streams: the points of a sweep share them (common random numbers)
+    params: tuple[tuple[str, bool | int | float | str], ...] = ()
 
     def label(self) -> str:
-        """The configuration as reports show it: `UAV=2 UGV=2 targets=4`."""
+        """The configuration as reports show it: `UAV=2 UGV=2 targets=4 world.view=2`."""
         parts = [f"{k}={v}" for k, v in self.counts]
-        return " ".join([*parts, f"targets={self.targets}"])
+        return " ".join([*parts, f"targets={self.targets}", *(f"{k}={v}" for k, v in self.params)])
 
     def slug(self) -> str:
-        """A directory name: `UAV2_UGV2_targets4`."""
-        return "_".join([*(f"{k}{v}" for k, v in self.counts), f"targets{self.targets}"])
+        """A directory name: `UAV2_UGV2_targets4` (then `_world.view2`: parameters, with any
+        character but letters, digits, `.` and `-` as `-`)."""
+        swept = (_SLUG.sub("-", f"{k}{v}") for k, v in self.params)
+        return "_".join([*(f"{k}{v}" for k, v in self.counts), f"targets{self.targets}", *swept])
 
     def seed_key(self) -> list[int]:
         """The numbers that key the configuration's random streams."""

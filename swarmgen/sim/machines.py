@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -13,6 +14,7 @@ from swarmgen.sim.scenario import SimulationError
 
 if TYPE_CHECKING:
     from swarmgen.chart.model import Chart as ChartModel
+    from swarmgen.pipeline import Validation
 
 
 @dataclass(frozen=True)
@@ -47,22 +49,41 @@ class Machines:
 def compile_machines(model: Path) -> Machines:
     """Validate and lower the model, and render each member type's module with the asyncio
     backend, exactly as `swarmgen compile` does."""
-    from swarmgen import __version__, pipeline
+    return compile_variants(model, ({},))[0]
+
+
+def compile_variants(
+    model: Path, data: Sequence[Mapping[str, Mapping[str, Any]]]
+) -> list[Machines]:
+    """`compile_machines` once per entry of `data` (member type -> datum -> the default it
+    starts with instead of the model's: a sweep's data parameters), validating once."""
     from swarmgen import diagnostics as dg
-    from swarmgen.backends.asyncio_backend import render_member
-    from swarmgen.ir.query import composition as swarm_composition
+    from swarmgen import pipeline
 
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         raise SimulationError(dg.refusal_line(model, validation.diagnostics))
+    return [_machines(model, validation, overrides) for overrides in data]
+
+
+def _machines(
+    model: Path, validation: Validation, data: Mapping[str, Mapping[str, Any]]
+) -> Machines:
+    from swarmgen import __version__
+    from swarmgen.backends.asyncio_backend import render_member
+    from swarmgen.ir.query import composition as swarm_composition
+
+    assert validation.model is not None  # compile_machines refused the others
     common = {"version": __version__, "source": model.name, "runtime": "swarmgen.runtime"}
     members = []
     for chart in validation.charts:  # lowered once, by validate
         if chart.member is None:
             continue  # a stand-alone machine: no member runs it
+        member = chart.member
+        chart = _with_defaults(chart, data.get(member, {}))
         members.append(
             MemberMachine(
-                chart.member,
+                member,
                 chart.name,
                 render_member(chart, common),
                 {b.name: b.outputs for b in chart.behaviours},
@@ -74,6 +95,17 @@ def compile_machines(model: Path) -> Machines:
         raise SimulationError(f"{model}: no member type has a state machine; nothing to simulate")
     composition = swarm_composition(validation.model)
     return Machines(validation.model.name, model.name, tuple(members), composition)
+
+
+def _with_defaults(chart: ChartModel, defaults: Mapping[str, Any]) -> ChartModel:
+    """The chart with these data defaults (by datum name) as the data's initial values (the
+    values the rendered module starts its members with; `sim.params` typed them)."""
+    if not defaults:
+        return chart
+    data = tuple(
+        replace(d, initial=defaults[d.name]) if d.name in defaults else d for d in chart.data
+    )
+    return replace(chart, data=data)
 
 
 def _initials(chart: ChartModel) -> dict[tuple[str, str], Any]:

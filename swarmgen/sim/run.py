@@ -7,13 +7,18 @@ member on the simulator's host), `batch` (repetitions of one configuration and t
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path, PurePosixPath
+from typing import TYPE_CHECKING
 
 from swarmgen import outtree
-from swarmgen.sim.machines import compile_machines
+from swarmgen.sim.machines import compile_variants
+from swarmgen.sim.params import Variant, data_overrides
 from swarmgen.sim.scenario import Scenario
 from swarmgen.sim.sweep import Simulation, simulate
+
+if TYPE_CHECKING:
+    from swarmgen.sim.executors import Executor
 
 
 def outputs(sim: Simulation) -> dict[str, bytes]:
@@ -25,20 +30,27 @@ def outputs(sim: Simulation) -> dict[str, bytes]:
     from swarmgen.sim import plots, stats
 
     summary = stats.summarise(sim)
-    types = summary.types
+    types, params = summary.types, summary.params
     files: dict[str, bytes] = {}
     files["runs.csv"] = stats.runs_table(sim).encode()
-    files["coverage.csv"] = stats.table(summary.coverage, types, "coverage").encode()
+    files["coverage.csv"] = stats.table(summary.coverage, types, "coverage", params).encode()
     if summary.search:
-        files["search.csv"] = stats.table(summary.search, types, "targets").encode()
-        files["rescue.csv"] = stats.table(summary.rescue, types, "targets").encode()
+        files["search.csv"] = stats.table(summary.search, types, "targets", params).encode()
+        files["rescue.csv"] = stats.table(summary.rescue, types, "targets", params).encode()
     payload = {
         "generator": "swarmgen simulate",
         "version": __version__,
         "model": sim.machines.model,
         "source": sim.machines.source,
         "scenario": sim.scenario.to_json(),
-        "configurations": [{"members": dict(c.counts), "targets": c.targets} for c in sim.configs],
+        "configurations": [
+            {
+                "members": dict(c.counts),
+                "targets": c.targets,
+                **({"params": dict(c.params)} if c.params else {}),
+            }
+            for c in sim.configs
+        ],
         "summary": stats.to_json(summary),
         "runs": [asdict(r) for r in sim.runs],
     }
@@ -69,15 +81,25 @@ def simulate_model(
     progress: Callable[[int, int], None] | None = None,
     record: Path | None = None,
     storage: str = "mcap",
+    *,
+    variants: Sequence[Variant] | None = None,
+    executor: Executor | None = None,
 ) -> tuple[Simulation, dict[str, bytes]]:
-    """`swarmgen simulate`: compile MODEL, run the scenario's sweep, write the results (and with
-    `record`, one bag per run into that new directory)."""
+    """`swarmgen simulate`: compile MODEL, run the scenario's sweep (each of `variants`, the
+    points of `--param`/`--sweep`, if given) through `executor` (default: `workers` local
+    processes), write the results (and with `record`, one bag per run into that new
+    directory)."""
     if out_dir is not None:
         outtree.preflight(out_dir, "simulate")  # a bad -o is refused before the runs, not after
-    machines = compile_machines(model)
+    datas = data_overrides(variants) if variants else [{}]
+    compiled = compile_variants(model, datas)
+    points = [
+        (compiled[datas.index(v.data)], v.scenario, v.columns()) for v in variants or ()
+    ] or None
     sim = simulate(
-        machines, scenario, workers=workers, progress=progress, record=record, storage=storage
-    )
+        compiled[0], scenario, workers=workers, progress=progress, record=record,
+        storage=storage, points=points, executor=executor,
+    )  # fmt: skip
     files = outputs(sim)
     if out_dir is not None:
         write_outputs(files, out_dir, model.name)

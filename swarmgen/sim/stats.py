@@ -10,7 +10,7 @@ import io
 import math
 import statistics
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 # Student's t quantile t(0.975, df) for df = 1..30 (two-sided 95 percent).
@@ -95,6 +95,7 @@ class Row:
     targets: int
     level: float
     estimate: Estimate
+    params: tuple[tuple[str, Any], ...] = ()  # the configuration's swept parameters
 
 
 @dataclass(frozen=True)
@@ -106,6 +107,7 @@ class Summary:
     rescue: list[Row]
     types: list[str]
     swept: str | None  # the member type whose count is swept (the x axis), if any
+    params: list[str] = field(default_factory=list)  # swept parameters: columns, plot facets
 
 
 def summarise(sim: Any) -> Summary:
@@ -117,35 +119,54 @@ def summarise(sim: Any) -> Summary:
     coverage, search, rescue = [], [], []
     for index, config in enumerate(sim.configs):
         runs = by_config.get(index, [])
+
+        def row(level: float, value: Estimate, config: Any = config) -> Row:
+            return Row(config.counts, config.targets, level, value, config.params)
+
         for number, level in enumerate(scenario.coverage_levels):
             values = [r.coverage[number] for r in runs]
-            coverage.append(Row(config.counts, config.targets, level, estimate(values)))
+            coverage.append(row(level, estimate(values)))
         if config.targets:
             for level in scenario.target_levels:
                 found = [kth(r.found, level, config.targets) for r in runs]
                 saved = [kth(r.rescued, level, config.targets) for r in runs]
-                search.append(Row(config.counts, config.targets, level, estimate(found)))
-                rescue.append(Row(config.counts, config.targets, level, estimate(saved)))
+                search.append(row(level, estimate(found)))
+                rescue.append(row(level, estimate(saved)))
     types = [kind for kind, _ in sim.configs[0].counts] if sim.configs else []
     swept = next(
         (k for k in types if len({dict(c.counts)[k] for c in sim.configs}) > 1),
         next((k for k in types if any(dict(c.counts)[k] for c in sim.configs)), None),
     )
-    return Summary(coverage, search, rescue, types, swept)
+    return Summary(coverage, search, rescue, types, swept, param_names(sim.configs))
+
+
+def param_names(configs: Sequence[Any]) -> list[str]:
+    """The swept parameters of the configurations, in the order the sweep names them."""
+    names: dict[str, None] = {}
+    for config in configs:
+        names.update((k, None) for k, _ in config.params)
+    return list(names)
+
+
+def _cell(value: Any) -> Any:
+    """A parameter's value in a table: JSON's spelling for booleans (`true`), else as is."""
+    return ("true" if value else "false") if isinstance(value, bool) else value
 
 
 def _number(value: float | None, digits: int = 3) -> str:
     return "" if value is None else f"{value:.{digits}f}"
 
 
-def table(rows: list[Row], types: list[str], kind: str) -> str:
-    """CSV: member counts, targets, level, runs reaching it, mean, sd, 95 percent CI."""
+def table(rows: list[Row], types: list[str], kind: str, params: Sequence[str] = ()) -> str:
+    """CSV: member counts, targets, swept parameters, level, runs reaching it, mean, sd, 95
+    percent CI."""
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     writer.writerow(
         [
             *types,
             "targets",
+            *params,
             "level",
             "n",
             "missing",
@@ -162,6 +183,7 @@ def table(rows: list[Row], types: list[str], kind: str) -> str:
             [
                 *(dict(row.counts).get(k, 0) for k in types),
                 row.targets,
+                *(_cell(dict(row.params).get(k, "")) for k in params),
                 level_name(row.level, kind),
                 e.n,
                 e.missing,
@@ -179,6 +201,7 @@ def runs_table(sim: Any) -> str:
     """CSV: one line per run with its raw times."""
     scenario = sim.scenario
     types = [kind for kind, _ in sim.configs[0].counts] if sim.configs else []
+    params = param_names(sim.configs)
     out = io.StringIO()
     writer = csv.writer(out, lineterminator="\n")
     cov = [f"coverage_{level_name(v, 'coverage')}" for v in scenario.coverage_levels]
@@ -188,6 +211,7 @@ def runs_table(sim: Any) -> str:
         [
             *types,
             "targets",
+            *params,
             "rep",
             "reason",
             "end_tick",
@@ -205,6 +229,7 @@ def runs_table(sim: Any) -> str:
             [
                 *(counts[k] for k in types),
                 config.targets,
+                *(_cell(dict(config.params).get(k, "")) for k in params),
                 run.rep,
                 run.reason,
                 run.end_tick,
@@ -236,6 +261,7 @@ def to_json(summary: Summary) -> dict[str, Any]:
             {
                 "members": dict(r.counts),
                 "targets": r.targets,
+                **({"params": dict(r.params)} if r.params else {}),
                 "level": level_name(r.level, kind),
                 "n": r.estimate.n,
                 "missing": r.estimate.missing,

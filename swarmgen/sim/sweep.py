@@ -1,16 +1,17 @@
-"""Sweeps: every configuration of a scenario, its repetitions spread over processes."""
+"""Sweeps: every configuration of a scenario (or of each point of a parameter sweep), its
+repetitions cut into jobs and run through an executor (`sim.executors`)."""
 
 from __future__ import annotations
 
 import itertools
 import math
-import multiprocessing
-from collections.abc import Callable, Iterator
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from swarmgen.sim.batch import Batch, Config, RunResult
+from swarmgen.sim.executors import Executor, Failure, LocalExecutor
 from swarmgen.sim.machines import Machines, build_chart
 from swarmgen.sim.scenario import Scenario, SimulationError
 
@@ -50,19 +51,51 @@ def configurations(machines: Machines, scenario: Scenario) -> list[Config]:
     return configs
 
 
-def _job(
-    machines: Machines,
-    scenario: Scenario,
-    config: Config,
-    index: int,
-    reps: list[int],
-    record: Path | None = None,
-    storage: str = "mcap",
-) -> list[RunResult]:
-    results = Batch(machines, scenario, config, reps, record=record, storage=storage).run_all()
-    for result in results:
-        result.config = index
+@dataclass(frozen=True)
+class Job:
+    """Some repetitions of one configuration: what one batch runs (pickled to workers)."""
+
+    machines: Machines
+    scenario: Scenario
+    config: Config
+    index: int
+    reps: list[int]
+    record: Path | None = None
+    storage: str = "mcap"
+
+
+def run_jobs(jobs: Sequence[Job]) -> list[RunResult]:
+    """Run the jobs one after the other: one executor task."""
+    results: list[RunResult] = []
+    for job in jobs:
+        batch = Batch(
+            job.machines, job.scenario, job.config, job.reps, record=job.record,
+            storage=job.storage,
+        )  # fmt: skip
+        for result in batch.run_all():
+            result.config = job.index
+            results.append(result)
     return results
+
+
+def failed_runs(job: Job, error: str) -> list[RunResult]:
+    """The runs of a job that failed twice: present in the results, marked failed."""
+    levels, targets = len(job.scenario.coverage_levels), job.config.targets
+    return [
+        RunResult(
+            config=job.index,
+            rep=rep,
+            end_tick=0,
+            reason="failed",
+            coverage=[None] * levels,
+            coverage_final=0.0,
+            found=[None] * targets,
+            rescued=[None] * targets,
+            events=0,
+            errors=[error],
+        )
+        for rep in job.reps
+    ]
 
 
 def _chunks(reps: int, parts: int) -> Iterator[list[int]]:
@@ -81,6 +114,12 @@ class Simulation:
     runs: list[RunResult]  # ordered by (config, rep)
 
 
+# One point of a sweep: the machines it runs (a data parameter changes them), its scenario, and
+# the parameters that are columns of their own (sim.params.Variant.columns).
+Point = tuple[Machines, Scenario, tuple[tuple[str, Any], ...]]
+TASKS_PER_SLOT = 4  # beyond this many jobs per slot, jobs are grouped into fewer tasks
+
+
 def simulate(
     machines: Machines,
     scenario: Scenario,
@@ -88,39 +127,60 @@ def simulate(
     progress: Callable[[int, int], None] | None = None,
     record: Path | None = None,
     storage: str = "mcap",
+    *,
+    points: Sequence[Point] | None = None,
+    executor: Executor | None = None,
 ) -> Simulation:
-    """Run every configuration `scenario.reps` times; `progress(done, total)` after each batch.
-    `record`: a new directory to write one bag per run into (`storage`: mcap or sqlite3)."""
-    configs = configurations(machines, scenario)
-    parts = max(1, math.ceil(workers / len(configs))) if workers > 1 else 1
-    jobs = [(i, chunk) for i, _ in enumerate(configs) for chunk in _chunks(scenario.reps, parts)]
-    total = len(configs) * scenario.reps
+    """Run every configuration `scenario.reps` times; `progress(done, total)` after each task.
+    `record`: a new directory to write one bag per run into (`storage`: mcap or sqlite3).
+    `points`: the sweep's points (default: the scenario alone); `executor`: where the tasks
+    run (default: `workers` local processes)."""
+    chosen = executor or LocalExecutor(workers)
+    owners: list[tuple[Machines, Scenario]] = []
+    configs: list[Config] = []
+    for owner, point, columns in points or [(machines, scenario, ())]:
+        for config in configurations(owner, point):
+            configs.append(replace(config, params=columns))
+            owners.append((owner, point))
+    slots = chosen.slots
+    parts = max(1, math.ceil(slots / len(configs))) if slots > 1 else 1
+    jobs = [
+        Job(*owners[i], config, i, reps, record, storage)
+        for i, config in enumerate(configs)
+        for reps in _chunks(owners[i][1].reps, parts)
+    ]
+    tasks = _group(jobs, slots)
+    total = sum(len(j.reps) for j in jobs)
     done = 0
-    results: list[RunResult] = []
+
+    def finished(size: int) -> None:
+        nonlocal done
+        done += size
+        if progress is not None:
+            progress(done, total)
+
     if progress is not None:
         progress(0, total)
-    if workers <= 1 or len(jobs) == 1:
-        for index, reps in jobs:
-            results += _job(machines, scenario, configs[index], index, reps, record, storage)
-            done += len(reps)
-            if progress is not None:
-                progress(done, total)
-    else:
-        methods = multiprocessing.get_all_start_methods()
-        for machine in machines.members:  # built once here: forked workers inherit the charts
-            build_chart(machine)
-        context = multiprocessing.get_context("fork" if "fork" in methods else None)
-        with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-            futures = {
-                pool.submit(
-                    _job, machines, scenario, configs[index], index, reps, record, storage
-                ): len(reps)
-                for index, reps in jobs
-            }
-            for future in as_completed(futures):
-                results += future.result()
-                done += futures[future]
-                if progress is not None:
-                    progress(done, total)
+    if slots > 1 and isinstance(chosen, LocalExecutor):
+        for owner, _ in owners:  # built once here: forked workers inherit the charts
+            for machine in owner.members:
+                build_chart(machine)
+    outcomes = chosen.map(run_jobs, tasks, [sum(len(j.reps) for j in t) for t in tasks], finished)
+    results: list[RunResult] = []
+    for task, outcome in zip(tasks, outcomes, strict=True):
+        if isinstance(outcome, Failure):
+            results += [r for job in task for r in failed_runs(job, outcome.error)]
+        else:
+            results += outcome
     results.sort(key=lambda r: (r.config, r.rep))
     return Simulation(machines, scenario, configs, results)
+
+
+def _group(jobs: list[Job], slots: int) -> list[list[Job]]:
+    """One job per task, or, with many more jobs than slots, runs of consecutive jobs (fewer
+    tasks keep the per-task overhead of a cluster small against the runs)."""
+    if slots <= 1 or len(jobs) <= TASKS_PER_SLOT * slots:
+        return [[job] for job in jobs]
+    count = TASKS_PER_SLOT * slots
+    size = math.ceil(len(jobs) / count)
+    return [jobs[i : i + size] for i in range(0, len(jobs), size)]
