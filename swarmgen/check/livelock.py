@@ -258,7 +258,12 @@ class _Run:
     def _matches(self, transition: Transition, owner: str, event: str) -> bool:
         if not transition.triggers:
             vertex = self.placed[owner].vertex
-            return not transition.eventless and isinstance(vertex, State) and bool(vertex.regions) and event == _done(owner)
+            return (
+                not transition.eventless
+                and isinstance(vertex, State)
+                and bool(vertex.regions)
+                and event == _done(owner)
+            )
         for trigger in transition.triggers:
             if trigger.kind == TriggerKind.ANY:
                 return True
