@@ -151,7 +151,7 @@ BAD = {
         ),
         "SG062",
         3,
-    ),  # fmt: skip
+    ),
     "late-binding": (
         _doc('<state id="A">\n<datamodel><data id="x" expr="1"/></datamodel></state>').replace(
             'initial="A"', 'initial="A" binding="late"'
