@@ -2,16 +2,18 @@
 as text, JSON or SARIF.
 
 Every stage returns its diagnostics instead of raising on model errors. Codes and their message
-templates are registered once (`codes`, `codes_checks`, `codes_ros`, `codes_scxml`), so that `docs/diagnostics.md`, the
-renderers and every stage agree; `model` holds the data types, `render` the output formats.
+templates are registered once (`codes`, `codes_checks`, `codes_ros`, `codes_scxml`,
+`codes_modelio`), so that `docs/diagnostics.md`, the renderers and every stage agree; `model`
+holds the data types, `render` the output formats.
 """
 
 from __future__ import annotations
 
-from swarmgen.diagnostics import codes, codes_checks, codes_ros, codes_scxml
+from swarmgen.diagnostics import codes, codes_checks, codes_modelio, codes_ros, codes_scxml
 from swarmgen.diagnostics.codes import *  # noqa: F403 (the codes are the public API)
 from swarmgen.diagnostics.codes import CODES, active_codes, register, retire
 from swarmgen.diagnostics.codes_checks import *  # noqa: F403
+from swarmgen.diagnostics.codes_modelio import *  # noqa: F403
 from swarmgen.diagnostics.codes_ros import *  # noqa: F403
 from swarmgen.diagnostics.codes_scxml import *  # noqa: F403
 from swarmgen.diagnostics.model import (
@@ -67,3 +69,4 @@ __all__ += codes.__all__
 __all__ += codes_checks.__all__
 __all__ += codes_ros.__all__
 __all__ += codes_scxml.__all__
+__all__ += codes_modelio.__all__

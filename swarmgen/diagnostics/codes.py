@@ -101,8 +101,10 @@ NOT_XMI = register(
     "not-xmi",
     "the root element is not one of a format swarmgen reads",
     input_error=True,
-    message="root element <{tag}> is not a model swarmgen reads (xmi:XMI, uml:Model, scxml)",
-    hint="export the model from Modelio with File > Export > XMI, or give an SCXML document",
+    message="root element <{tag}> is not a model swarmgen reads "
+    "(xmi:XMI, uml:Model, scxml, Modelio's EXT)",
+    hint="export the model from Modelio with File > Export > XMI, or give an SCXML document, "
+    "a Modelio .exml file or a .ramc model component",
 )
 TOO_LARGE = register(
     "SG005",

@@ -1,5 +1,5 @@
 """The input formats, in one table, and `load`: which reader a file goes to is decided by its
-content (an XML document's root element), never by its suffix.
+content (an archive's magic bytes, an XML document's root element), never by its suffix.
 
 Each reader is named by module and function and imported only when a file needs it, so
 validating an XMI model does not import the SCXML reader.
@@ -24,6 +24,7 @@ from swarmgen.span import Span
 
 Loaded = tuple[RawModel | None, list[Diagnostic]]
 TreeReader = Callable[[etree._ElementTree, str, str], Loaded]  # (tree, source text, shown name)
+BytesReader = Callable[[bytes, str], Loaded]  # (the file's bytes, shown name)
 
 SCXML_NAMESPACE = "http://www.w3.org/2005/07/scxml"
 
@@ -37,15 +38,32 @@ class XmlFormat:
     reader: str
 
 
+@dataclass(frozen=True)
+class BinaryFormat:
+    """A format that is not XML, known by the bytes it starts with, and its reader."""
+
+    name: str
+    magic: bytes
+    reader: str
+
+
 def _is_scxml_root(namespace: str | None, local: str) -> bool:
     return local == "scxml" and namespace in (None, SCXML_NAMESPACE)
 
 
-# The first format whose `accepts` holds reads the document; any other root is SG004. (Modelio's
-# native .exml/.ramc files are not read yet: a zip is not XML, so it is SG002.)
+def _is_exml_root(namespace: str | None, local: str) -> bool:
+    return local == "EXT" and namespace is None
+
+
+# Read before any XML parsing: a zip (Modelio's .ramc model component) is not XML.
+BINARY_FORMATS: tuple[BinaryFormat, ...] = (
+    BinaryFormat("ramc", b"PK\x03\x04", "swarmgen.frontend.modelio:from_archive"),
+)
+# The first format whose `accepts` holds reads the document; any other root is SG004.
 XML_FORMATS: tuple[XmlFormat, ...] = (
     XmlFormat("xmi", is_xmi_root, "swarmgen.frontend.xmi:from_tree"),
     XmlFormat("scxml", _is_scxml_root, "swarmgen.frontend.scxml:from_tree"),
+    XmlFormat("exml", _is_exml_root, "swarmgen.frontend.modelio:from_tree"),
 )
 
 
@@ -55,6 +73,9 @@ def load(path: Path) -> Loaded:
     shown = str(path)
     try:
         data = read_bounded(path, shown)
+        binary = next((f for f in BINARY_FORMATS if data.startswith(f.magic)), None)
+        if binary is not None:
+            return cast(BytesReader, _function(binary.reader))(data, shown)
         tree = parse_safely(data, shown)
         read = _tree_reader(tree, shown)
         text = decoded(data, tree.docinfo.encoding or "utf-8", shown)
@@ -68,11 +89,11 @@ def _tree_reader(tree: etree._ElementTree, shown: str) -> TreeReader:
     qname = etree.QName(root)
     for fmt in XML_FORMATS:
         if fmt.accepts(qname.namespace, qname.localname):
-            return _reader(fmt.reader)
+            return cast(TreeReader, _function(fmt.reader))
     span = Span(file=shown, line=node_line(root) or 1, col=1)
     raise InputError(dg.NOT_XMI.at(span, tag=root.tag))
 
 
-def _reader(target: str) -> TreeReader:
+def _function(target: str) -> object:
     module_name, _, function = target.partition(":")
-    return cast(TreeReader, getattr(importlib.import_module(module_name), function))
+    return cast(object, getattr(importlib.import_module(module_name), function))
