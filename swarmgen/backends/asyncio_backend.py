@@ -25,6 +25,8 @@ RUNTIME_MODULES = (
     "cli",
     "replay",
     "plugins",
+    "transport",
+    "station",
 )
 
 # `replay`, `sim` and the tests name these here, where the asyncio package is made.

@@ -33,6 +33,9 @@ from .args import Parser, finite
 from .engine import Event
 from .member import CANCEL_GRACE, Fault, InMemoryBus, Library, Member
 from .plugins import Chain, PluginError, Plugins, load_factory
+from .station import add_arguments, load_script, open_record, resolve_options
+from .station import run_station as _run_station
+from .transport import Faults, UdpBus
 
 BEAT = 0.05  # seconds between the loop's heartbeats (what the watchdog thread watches)
 BLOCK_AFTER = 0.5  # a loop that misses its heartbeat this long is blocked by a behaviour
@@ -155,6 +158,7 @@ def _parser(prog: str, member_types: Mapping[str, ModuleType]) -> Parser:
         default=CANCEL_GRACE,
         help="seconds a cancelled behaviour may take to end before it is abandoned",
     )
+    add_arguments(parser, who)
     return parser
 
 
@@ -175,6 +179,9 @@ def main(
         args.events = station_events(args.events, lambda name: _reacts(charts.values(), name))
     except ValueError as err:
         parser.error(f"argument --events: {err}")
+    _network_arguments(parser, args, member_types, charts)
+    if args.station_only:
+        return _station_only(args)
     if args.member:
         members = [(args.member, str(args.id))]
     else:
@@ -242,7 +249,11 @@ async def _run(
     args: Any,
     outputs: Mapping[str, Sequence[str]] | None,
 ) -> int:
-    bus = InMemoryBus()
+    try:
+        bus = await _open_bus(args)
+    except OSError as err:
+        print(f"{members[0][0]}/{members[0][1]}: the network refused: {err}", file=sys.stderr)
+        return 1
     tracer = JsonTracer()
     running = [
         Member(
@@ -263,13 +274,20 @@ async def _run(
     watchdog.start(asyncio.get_running_loop())
     tasks = [asyncio.create_task(m.run(), name=f"member {m.member_id}") for m in running]
     watchdog.runs = dict(zip(tasks, running, strict=True))
-    station = asyncio.create_task(_station(bus, args.events))
+    if isinstance(bus, UdpBus):
+        # after the members' first steps (their tasks run first): announced with their states
+        asyncio.get_running_loop().call_soon(bus.start_announcing)
+        station = asyncio.create_task(asyncio.sleep(0))
+    else:
+        station = asyncio.create_task(_station(bus, args.events))
     await asyncio.wait(tasks, timeout=args.duration)
     station.cancel()
     for member in running:
         member.stop()
     results = await asyncio.gather(*tasks, station, return_exceptions=True)
     watchdog.stop()
+    if isinstance(bus, UdpBus):
+        bus.close()  # after a last announcement: where each member ended
     for member, result in zip(running, results[: len(tasks)], strict=True):
         if isinstance(result, BaseException):  # the member itself broke (not a behaviour)
             member.add_error(f"the member stopped: {result!r}")
@@ -277,6 +295,59 @@ async def _run(
         for error in member.errors:
             print(f"{member.member_type}/{member.member_id}: {error}", file=sys.stderr)
     return 0 if all(m.clean for m in running) else 1
+
+
+def _network_arguments(
+    parser: Parser, args: Any, member_types: Mapping[str, ModuleType], charts: Mapping[str, Any]
+) -> None:
+    """Check the network options together (argparse checked each): exit 2 when they clash."""
+    if args.transport == "udp" or args.station_only:
+        try:
+            args.options = resolve_options(args, member_types)
+        except ValueError as err:
+            parser.error(f"network options: {err}")
+    if args.station_only:
+        if args.transport != "udp":
+            parser.error("--station-only needs --transport udp")
+        try:
+            script = args.station_script and load_script(
+                args.station_script, lambda name: _reacts(charts.values(), name)
+            )
+        except ValueError as err:
+            parser.error(f"argument --station-script: {err}")
+        plain = [(at, name, None) for at, name in args.events]
+        args.events = sorted([*plain, *(script or [])], key=lambda e: e[0])
+    elif args.transport == "udp" and (args.swarm or args.events):
+        parser.error("--transport udp runs one --member per process; --station-only sends events")
+
+
+def _station_only(args: Any) -> int:
+    """The ground station of a swarm on the network (`--station-only`)."""
+    try:
+        out = open_record(args.record)
+    except OSError as err:
+        print(f"station: cannot write {args.record}: {err.strerror}", file=sys.stderr)
+        return 2
+    try:
+        return asyncio.run(_run_station(args.events, args.options, args, out))
+    except OSError as err:
+        print(f"station: the network refused: {err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+    finally:
+        if out is not sys.stdout:
+            out.close()
+
+
+async def _open_bus(args: Any) -> InMemoryBus | UdpBus:
+    """The in-process bus, or the group (`--transport udp`) joined."""
+    if args.transport != "udp":
+        return InMemoryBus()
+    faults = Faults(args.drop, args.duplicate, args.delay, args.fault_seed)
+    bus = UdpBus(args.options, faults, name=f"{args.member}/{args.id}")
+    await bus.open()
+    return bus
 
 
 async def _station(bus: InMemoryBus, events: list[tuple[float, str]]) -> None:
