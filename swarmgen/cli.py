@@ -76,6 +76,11 @@ COMMANDS: dict[str, Entry] = {
         "Run MODEL's compiled behaviours in the paper's abstract world (or, with `--level "
         "detailed`, the generated ROS 2 swarm in the continuous world) and report the statistics.",
     ),
+    "verify": Entry(
+        "verify",
+        "verify",
+        "Verify MODEL's swarm exhaustively (exit 0 verified, 1 violated, 4 bounded).",
+    ),
 }
 
 

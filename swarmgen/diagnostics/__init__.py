@@ -3,13 +3,20 @@ as text, JSON or SARIF.
 
 Every stage returns its diagnostics instead of raising on model errors. Codes and their message
 templates are registered once (`codes`, `codes_checks`, `codes_ros`, `codes_scxml`,
-`codes_modelio`), so that `docs/diagnostics.md`, the renderers and every stage agree; `model`
+`codes_modelio`, `codes_verify`), so that `docs/diagnostics.md`, the renderers and every stage agree; `model`
 holds the data types, `render` the output formats.
 """
 
 from __future__ import annotations
 
-from swarmgen.diagnostics import codes, codes_checks, codes_modelio, codes_ros, codes_scxml
+from swarmgen.diagnostics import (
+    codes,
+    codes_checks,
+    codes_modelio,
+    codes_ros,
+    codes_scxml,
+    codes_verify,  # noqa: F401 (registers the verify codes; `verify` names them as `cv`)
+)
 from swarmgen.diagnostics.codes import *  # noqa: F403 (the codes are the public API)
 from swarmgen.diagnostics.codes import CODES, active_codes, register, retire
 from swarmgen.diagnostics.codes_checks import *  # noqa: F403

@@ -1,0 +1,103 @@
+"""Counterexamples: the shortest path the search found, run again member by member with real
+identities, printed as a timeline and written as one `swarmgen replay` scenario per member.
+
+Under symmetry the search numbers members by their place in each state's canonical order; the
+path is re-run from the initial state without reduction, mapping each step's member through the
+canonical order of the state it is taken in, so the trace names real members. Each member's
+scenario is the inputs it took, in order (deliveries as `event` steps, behaviour ends as
+`complete` steps naming their state): its engine is deterministic, so `swarmgen replay` of the
+scenario reaches the member's configuration at the end of the trace.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from swarmgen.verify.system import Step, SwarmState, System, canonical
+
+MAX_SHOWN = 200  # timeline lines printed (the scenarios hold every step)
+
+
+@dataclass
+class Trace:
+    """A counterexample: its timeline, the final state (members in system order) and each
+    member's replay scenario."""
+
+    lines: list[str]
+    final: SwarmState
+    scenarios: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
+    length: int = 0
+
+
+def rerun(system: System, steps: list[Step], symmetry: bool) -> Trace:
+    """The path's steps again, on real members (see the module docstring)."""
+    state = system.initial()
+    trace = Trace([], state, {member_id: [] for member_id in system.ids}, len(steps))
+    for number, step in enumerate(steps, start=1):
+        if step.member >= 0 and symmetry:
+            step = replace(step, member=canonical(system, state)[1][step.member])
+        state, effect = system.apply(state, step)
+        if effect.replay is not None:
+            trace.scenarios[system.ids[effect.member]].append(dict(effect.replay))
+        trace.lines.append(f"{number:4d}  {_describe(system, step, state)}")
+    trace.final = state
+    return trace
+
+
+def active_names(system: System, state: SwarmState, index: int) -> list[str]:
+    """The model names of a member's active atomic states, in document order."""
+    chart = system.kinds[system.types[index]].chart
+    nodes = sorted(
+        (chart.nodes[i] for i in state.members[index].engine.config), key=lambda n: n.order
+    )
+    return [chart.names.get(n.id, n.id) for n in nodes if n.is_atomic]
+
+
+def _describe(system: System, step: Step, after: SwarmState) -> str:
+    if step.kind == "station":
+        return f"station sends {step.event}"
+    who = system.ids[step.member]
+    where = ", ".join(active_names(system, after, step.member)) or "-"
+    chart = system.kinds[system.types[step.member]].chart
+    state = chart.names.get(step.state, step.state)
+    if step.kind == "deliver":
+        return f"{who} takes the next event of its inbox  -> {who}: {where}"
+    if step.kind == "outcome":
+        return f"{who}: the behaviour of {state} ends with '{step.event}'  -> {who}: {where}"
+    if step.kind == "emit":
+        return f"{who}: the behaviour of {state} sends {step.event}"
+    return f"{who}: the timer {step.event} of {state} fires  -> {who}: {where}"
+
+
+def timeline(system: System, trace: Trace) -> list[str]:
+    """The trace's lines (clipped to MAX_SHOWN) and the final configuration of every member."""
+    shown = trace.lines[:MAX_SHOWN]
+    if len(trace.lines) > MAX_SHOWN:
+        shown.append(f"      ... {len(trace.lines) - MAX_SHOWN} more step(s) in the scenarios")
+    shown.append("      then:")
+    for index, member_id in enumerate(system.ids):
+        engine = trace.final.members[index].engine
+        status = "final" if engine.finished else "running"
+        names = ", ".join(active_names(system, trace.final, index))
+        shown.append(f"        {member_id} ({status}): {names}")
+    return shown
+
+
+def write_scenarios(system: System, trace: Trace, directory: Path, title: str) -> list[Path]:
+    """One replay scenario per member in `directory` (created): `<member id>.json`."""
+    directory.mkdir(parents=True, exist_ok=True)
+    written = []
+    for index, member_id in enumerate(system.ids):
+        active = trace.final.members[index].engine.config
+        payload = {
+            "member": system.kinds[system.types[index]].name,
+            "description": f"swarmgen verify: {title}; {member_id} ends in {', '.join(active)}",
+            "steps": trace.scenarios[member_id],
+        }
+        path = directory / f"{member_id}.json"
+        path.write_text(json.dumps(payload, indent=2, sort_keys=True, default=str) + "\n")
+        written.append(path)
+    return written
