@@ -15,6 +15,9 @@ import pytest
 STRICT_ENV = "SWARMGEN_STRICT_SKIPS"
 # Every skip over the external reference corpus starts with this (tests/conftest.py).
 REFERENCE_REASON = "reference corpus absent"
+# ... or this: what a user's machine may not allow (network namespaces need root); CI runs as
+# root, so there these tests run.
+PRIVILEGE_REASON = "needs privileges"
 ROS_EXTRA = "comes with the `ros` extra: run `make ros`"
 
 HAS_RCLPY = importlib.util.find_spec("rclpy") is not None
@@ -45,7 +48,7 @@ def _note(report: pytest.CollectReport | pytest.TestReport) -> None:
         return
     longrepr = report.longrepr
     reason = str(longrepr[2] if isinstance(longrepr, tuple) else longrepr)
-    if not reason.removeprefix("Skipped: ").startswith(REFERENCE_REASON):
+    if not reason.removeprefix("Skipped: ").startswith((REFERENCE_REASON, PRIVILEGE_REASON)):
         _unexpected.append(f"{report.nodeid}: {reason}")
 
 

@@ -27,6 +27,7 @@ from swarmgen.runtime.transport import (
     multicast_socket,
     params_options,
 )
+from tests.skips import PRIVILEGE_REASON
 
 ROOT = Path(__file__).resolve().parent.parent
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
@@ -366,7 +367,8 @@ def netns_available() -> str | None:
         ["ip", "netns", "add", probe], capture_output=True, text=True, check=False
     )
     if made.returncode != 0:
-        return f"cannot create network namespaces (`ip netns add`: {made.stderr.strip()})"
+        why = made.stderr.strip()
+        return f"{PRIVILEGE_REASON}: cannot create network namespaces (`ip netns add`: {why})"
     subprocess.run(["ip", "netns", "del", probe], capture_output=True, check=False)
     return None
 
@@ -375,7 +377,7 @@ def netns_available() -> str | None:
 def two_robots() -> Iterator[list[tuple[str, str]]]:
     """Two network namespaces joined by a veth pair: [(namespace, its address)] x 2, removed
     afterwards (deleting a namespace deletes its end of the pair, and the pair with it)."""
-    reason = netns_available() if shutil.which("ip") else "no `ip` command"
+    reason = netns_available() if shutil.which("ip") else f"{PRIVILEGE_REASON}: no `ip` command"
     if reason is not None:
         pytest.skip(reason)
     tag = f"{os.getpid() % 100_000}{next(_counter)}"
