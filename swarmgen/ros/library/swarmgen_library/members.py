@@ -132,6 +132,8 @@ class Swarm(Node):
         steady = Clock(clock_type=ClockType.STEADY_TIME)  # wall time: /clock has not started
 
         def poll() -> None:
+            if not self.context.ok():
+                return  # shutting down (a signal): rcl calls would fail
             matched = all(
                 m.count_clients(name) > 0 for m in self.members.values() for name in m.served
             )

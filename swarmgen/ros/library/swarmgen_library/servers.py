@@ -47,6 +47,12 @@ def serve(config: ServersConfig) -> int:
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except Exception:
+        # SIGINT/SIGTERM shut the context down between two callbacks; the next one's rcl call
+        # (a timer's count_clients, seen under load) then fails: that is the shutdown, not a
+        # fault. With the context still valid it is a real error.
+        if rclpy.ok():
+            raise
     finally:
         executor.shutdown()
         for node in nodes:
