@@ -18,7 +18,7 @@ the corners of the semantics (`ScenarioMaker.edge_scenarios`):
   step bound's, docs/semantics.md), alone, twice back to back, and followed by noise (each
   external event starts the bound's count again).
 
-Values come from the guards: `GuardValues` walks the guard expressions (swarmgen.ir.expr) for
+Values come from the guards: `GuardValues` walks the guard expressions (swarmgen.expr) for
 the constants each member datum, output and event field is compared against, divisors (zero)
 and booleans; flows through `raise`/`send` parameters (`raise lowBattery(level = battery)`
 gives `battery` the constants `event.level` is compared with).
@@ -39,8 +39,8 @@ from collections import deque
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
+from swarmgen import expr as x
 from swarmgen.chart import model as c
-from swarmgen.ir import expr as x
 from swarmgen.runtime import chart as rc
 from swarmgen.runtime.chart import ChartBuilder
 from swarmgen.runtime.engine import Engine, NullHost

@@ -1,4 +1,4 @@
-"""Tests of swarmgen.ir.expr: parsing, errors, limits, renderings and their safety."""
+"""Tests of swarmgen.expr: parsing, errors, limits, renderings and their safety."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from pydantic import TypeAdapter, ValidationError
 
-from swarmgen.ir.expr import (
+from swarmgen.expr import (
     MAX_DEPTH,
     MAX_INT,
     MAX_TEXT,

@@ -18,11 +18,10 @@ from pathlib import Path
 
 import pytest
 
-from swarmgen import pipeline
+from swarmgen import expr, pipeline
 from swarmgen.chart.lower import lower
 from swarmgen.check.guards import Undecidable, compile_guard, evaluate
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.scxml.emit import serialize
 from tests.hostile import ROOT, assert_clean, assert_refused, snapshot, swarmgen
 from tests.modelkit import Machine, ModelKit

@@ -21,12 +21,11 @@ from typing import Any
 
 import pytest
 
-from swarmgen import pipeline, replay
+from swarmgen import expr, pipeline, replay
 from swarmgen.backends import asyncio_backend, names, registry, smach_backend
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart import model as c
 from swarmgen.chart.lower import lower
-from swarmgen.ir import expr
 from swarmgen.runtime import smach
 from swarmgen.runtime.chart import Context
 from swarmgen.runtime.member import InMemoryBus

@@ -11,9 +11,9 @@ import functools
 from dataclasses import dataclass, field
 from typing import Any
 
+from swarmgen import expr
 from swarmgen.backends import pyformat, pyknown, pylayout
 from swarmgen.chart import model as c
-from swarmgen.ir import expr
 from swarmgen.names import identifier
 from swarmgen.runtime.chart import zero_like
 

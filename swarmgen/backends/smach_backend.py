@@ -8,6 +8,7 @@ from __future__ import annotations
 import keyword
 from dataclasses import dataclass, field
 
+from swarmgen import expr
 from swarmgen.backends import pylayout
 from swarmgen.backends.asyncio_backend import RUNTIME_MODULES
 from swarmgen.backends.pycommon import PackageBackend, member_view
@@ -20,7 +21,6 @@ from swarmgen.backends.pyrender import (
 )
 from swarmgen.chart import model as c
 from swarmgen.chart.model import Chart
-from swarmgen.ir import expr
 from swarmgen.names import IdAllocator, identifier, one_line, ros_name
 from swarmgen.render import render
 

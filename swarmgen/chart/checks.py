@@ -21,9 +21,9 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.chart import model as c
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, State
 from swarmgen.ir.query import walk
 from swarmgen.span import Span

@@ -17,11 +17,11 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from swarmgen import expr
 from swarmgen.chart import model as c
 from swarmgen.chart.cycles import bound_cycles
 from swarmgen.chart.lowering import Copy, Instance
 from swarmgen.chart.transitions import Transitions
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import (
     Behaviour,
     Event,

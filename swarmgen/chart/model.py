@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from swarmgen.ir import expr
+from swarmgen import expr
 from swarmgen.ir.nodes import Value
 
 NodeKind = Literal["state", "parallel", "final", "history"]

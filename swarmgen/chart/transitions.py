@@ -3,9 +3,9 @@ pseudostates' transitions and the actions of effects (docs/scxml.md)."""
 
 from __future__ import annotations
 
+from swarmgen import expr
 from swarmgen.chart import model as c
 from swarmgen.chart.lowering import Context, Copy
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import (
     OpaqueCode,
     PseudoKind,

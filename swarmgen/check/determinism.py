@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.check.guards import (
     Budget,
     Compiled,
@@ -28,7 +29,6 @@ from swarmgen.check.guards import (
     search,
 )
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, PseudoKind, Pseudostate, Transition, TriggerKind
 from swarmgen.ir.query import walk
 

@@ -4,8 +4,8 @@ behaviour outcomes a state does not handle."""
 from __future__ import annotations
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, State, TriggerKind
 from swarmgen.ir.query import ModelIndex, outgoing, walk
 

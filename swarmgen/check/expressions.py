@@ -5,8 +5,8 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
 from swarmgen.ir.query import ModelIndex, walk
 from swarmgen.span import Span

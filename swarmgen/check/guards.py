@@ -15,7 +15,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from swarmgen.ir import expr
+from swarmgen import expr
 
 MAX_VALUATIONS = 20_000  # per pair: past it, the pair counts as exclusive (as it always did)
 

@@ -21,8 +21,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import (
     FinalState,
     Machine,

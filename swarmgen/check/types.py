@@ -14,8 +14,8 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
 from swarmgen.ir.primitives import Primitive, primitive
 from swarmgen.ir.query import ModelIndex, walk

@@ -12,8 +12,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import (
     Machine,
     Model,

@@ -9,10 +9,10 @@ from dataclasses import dataclass, field
 from lxml import etree
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.frontend.raw import RawElement
 from swarmgen.frontend.scxml_expr import ExprUnsupported, InState, Marker, conjuncts, translate
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, in_sg, local
-from swarmgen.ir import expr
 
 _NOT_IN_IR = {
     "if": "conditional actions are not in the IR yet",

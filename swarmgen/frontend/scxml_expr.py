@@ -14,7 +14,7 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from swarmgen.ir import expr
+from swarmgen import expr
 
 MAX_TEXT = expr.MAX_TEXT
 _TOKEN = re.compile(

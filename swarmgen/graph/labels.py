@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
-from swarmgen.ir import expr
+from swarmgen import expr
 from swarmgen.ir import nodes as ir
 from swarmgen.names import one_line
 

@@ -12,11 +12,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 
+from swarmgen import expr
 from swarmgen.errors import SwarmgenError
 from swarmgen.graph.labels import ACTIVITY_LIMIT, actions_text, clip, transition_label
 from swarmgen.graph.structure import COMPOSITION_STEM
 from swarmgen.graph.styles import BEHAVIOUR_STYLES
-from swarmgen.ir import expr
 from swarmgen.ir import nodes as ir
 from swarmgen.ir.query import ModelIndex, connection_owner
 from swarmgen.names import IdAllocator, identifier

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Literal
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.frontend.raw import RawElement
-from swarmgen.ir import expr
 from swarmgen.ir.build_context import (
     Builder,
     short,

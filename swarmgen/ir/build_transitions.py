@@ -6,8 +6,8 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.frontend.raw import RawElement
-from swarmgen.ir import expr
 from swarmgen.ir.build_bodies import actions_of, bodies_of, quote_error
 from swarmgen.ir.build_context import (
     Builder,

@@ -12,7 +12,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from swarmgen.ir.expr import Action, Binding, Expr
+from swarmgen.expr import Action, Binding, Expr
 from swarmgen.span import Span
 
 Value = bool | int | float | str | None

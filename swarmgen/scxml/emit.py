@@ -13,10 +13,9 @@ from dataclasses import dataclass
 
 from lxml import etree
 
-from swarmgen import generated
+from swarmgen import expr, generated
 from swarmgen.chart import model as c
 from swarmgen.chart.lower import lower
-from swarmgen.ir import expr
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.names import identifier
 from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX, STEP_BOUND

@@ -5,10 +5,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import NoReturn
 
-from swarmgen.ir.expr.errors import error_at, escape_char, show
-from swarmgen.ir.expr.lex import Lexer, Tok
-from swarmgen.ir.expr.render import to_text
-from swarmgen.ir.expr.tree import (
+from swarmgen.expr.errors import error_at, escape_char, show
+from swarmgen.expr.lex import Lexer, Tok
+from swarmgen.expr.render import to_text
+from swarmgen.expr.tree import (
     COMPARISONS,
     MAX_DEPTH,
     MAX_TEXT,

@@ -8,8 +8,8 @@ import string
 from dataclasses import dataclass
 from typing import Literal, NoReturn
 
-from swarmgen.ir.expr.errors import error_at, show
-from swarmgen.ir.expr.tree import MAX_INT, Value
+from swarmgen.expr.errors import error_at, show
+from swarmgen.expr.tree import MAX_INT, Value
 
 TokKind = Literal["num", "str", "word", "op", "nl", "eof"]
 

@@ -10,16 +10,16 @@ parser (never ``eval`` nor Python's ``ast``), every identifier in the tree is va
 renderers quote strings with the target language's own escaping, so neither a name nor a string
 can inject code into the generated ECMAScript or Python.
 
-The package's public face, used as ``from swarmgen.ir import expr`` then ``expr.parse_expr``,
+The package's public face, used as ``from swarmgen import expr`` then ``expr.parse_expr``,
 ``expr.Binary``, ``expr.to_ecmascript``: the tree and its queries (``tree``), syntax errors
 (``errors``), the tokenizer (``lex``), the parser (``parse``) and the renderings (``render``).
 Modules of the package import one another directly, never through this file.
 """
 
-from swarmgen.ir.expr.errors import ExprError
-from swarmgen.ir.expr.parse import parse_actions, parse_bindings, parse_expr
-from swarmgen.ir.expr.render import js_string, to_ecmascript, to_python, to_text
-from swarmgen.ir.expr.tree import (
+from swarmgen.expr.errors import ExprError
+from swarmgen.expr.parse import parse_actions, parse_bindings, parse_expr
+from swarmgen.expr.render import js_string, to_ecmascript, to_python, to_text
+from swarmgen.expr.tree import (
     MAX_DEPTH,
     MAX_INT,
     MAX_TEXT,

@@ -8,8 +8,8 @@ import re
 from collections.abc import Callable
 from typing import assert_never
 
-from swarmgen.ir.expr.errors import escape_char
-from swarmgen.ir.expr.tree import (
+from swarmgen.expr.errors import escape_char
+from swarmgen.expr.tree import (
     ATOM_PREC,
     COMPARISONS,
     NOT_PREC,
