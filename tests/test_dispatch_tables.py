@@ -1,4 +1,4 @@
-"""The engine's dispatch tables (swarmgen/runtime/configuration.py: interned configurations,
+"""The engine's dispatch tables (swarmgen/runtime/configuration.py over microstep.py: interned configurations,
 selections and microstep plans; chart.py's compiled event fillers) against a brute-force
 interpreter that computes everything again at every step, as the engine did before the tables:
 on random charts (nesting, parallel regions, shallow and deep history, finals, internal
@@ -25,19 +25,16 @@ from swarmgen.runtime.chart import (
     fill_fields,
     record,
 )
-from swarmgen.runtime.configuration import (
-    Plan,
-    Step,
-    Tables,
+from swarmgen.runtime.configuration import Plan, Step, Tables, make_plan
+from swarmgen.runtime.engine import Engine, NullHost
+from swarmgen.runtime.microstep import (
     document_order,
     entry_set,
     exit_set,
     in_final,
-    make_plan,
     recorded_history,
     remove_conflicts,
 )
-from swarmgen.runtime.engine import Engine, NullHost
 
 EVENTS = ("a", "b", "c", "a.x", "b.y")
 # `r` is what transitions raise; no transition on `r` raises again, and none matches the

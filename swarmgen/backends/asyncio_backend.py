@@ -17,6 +17,7 @@ from swarmgen.render import render
 RUNTIME_MODULES = (
     "chart",
     "host",
+    "microstep",
     "configuration",
     "engine",
     "member",

@@ -27,15 +27,9 @@ from swarmgen.runtime.chart import (
     Transition,
     record,
 )
-from swarmgen.runtime.configuration import (
-    Configuration,
-    Plan,
-    Selection,
-    Tables,
-    document_order,
-    in_final,
-)
+from swarmgen.runtime.configuration import Configuration, Plan, Selection, Tables
 from swarmgen.runtime.host import Event, Host, NullHost
+from swarmgen.runtime.microstep import document_order, in_final
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
 

@@ -28,15 +28,9 @@ from .chart import (
     Transition,
     record,
 )
-from .configuration import (
-    Configuration,
-    Plan,
-    Selection,
-    Tables,
-    document_order,
-    in_final,
-)
+from .configuration import Configuration, Plan, Selection, Tables
 from .host import Event, Host, NullHost
+from .microstep import document_order, in_final
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
 
