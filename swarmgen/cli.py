@@ -76,6 +76,11 @@ COMMANDS: dict[str, Entry] = {
         "Run MODEL's compiled behaviours in the paper's abstract world (or, with `--level "
         "detailed`, the generated ROS 2 swarm in the continuous world) and report the statistics.",
     ),
+    "optimize": Entry(
+        "optimize",
+        "optimize",
+        "Search MODEL's parameters for the best value of the objectives over simulated runs.",
+    ),
     "verify": Entry(
         "verify",
         "verify",
