@@ -38,7 +38,7 @@ from swarmgen.errors import SwarmgenError
 
 MANIFEST = ".swarmgen.json"
 FORMAT = 1
-COMMANDS = ("compile", "graph", "simulate")
+COMMANDS = ("compile", "graph", "simulate", "optimize")
 MANIFEST_LIMIT = 16 * 2**20
 _JOURNAL = ".swarmgen-journal.json"  # inside the staging directory only
 _DIGEST = re.compile(r"[0-9a-f]{64}")

@@ -199,6 +199,13 @@ def test_best_variant_validates_and_compiles(tiny: Path, tmp_path: Path) -> None
         )
         == 6
     )
+    # the tree is optimize's own: simulate, which removes only its own kind, refuses it
+    assert json.loads((out / ".swarmgen.json").read_text())["command"] == "optimize"
+    simulated = CliRunner().invoke(
+        main, ["simulate", str(SAR), "--scenario", str(tiny), "-o", str(out)]
+    )
+    assert simulated.exit_code == 2, simulated.output
+    assert (out / "best.json").is_file()
 
 
 @pytest.mark.parametrize(

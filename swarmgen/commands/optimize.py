@@ -132,9 +132,9 @@ def _claim(output: Path) -> None:
     from swarmgen import outtree
     from swarmgen.sim.run import write_outputs
 
-    outtree.preflight(output, "simulate")
+    outtree.preflight(output, "optimize")
     if not (output / outtree.MANIFEST).is_file():
-        write_outputs({}, output, "")
+        write_outputs({}, output, "", "optimize")
 
 
 def _write(study: object, spec: Study, model: Model, output: Path) -> None:
@@ -157,7 +157,7 @@ def _write(study: object, spec: Study, model: Model, output: Path) -> None:
     else:
         notes.append("no trial completed")
     files["best.json"] = out.best_json(study, texts, notes)  # type: ignore[arg-type]
-    write_outputs(files, output, spec.model.name)
+    write_outputs(files, output, spec.model.name, "optimize")
 
 
 def _summary(study: object) -> str:

@@ -433,8 +433,12 @@ def _root_initial(node: etree._Element, ident: str) -> bool:
 
 
 def _compound(state: etree._Element | None) -> bool:
-    """A `<state>` with child states, or a `<parallel>`: UML's composite state."""
+    """Whether `state` becomes a UML composite state (regions or a submachine), by the rule
+    `States.state` builds it with."""
     if state is None:
         return False
-    kids = {local(k) for k in state if isinstance(k.tag, str)}
-    return local(state) == "parallel" or bool(kids & {"state", "parallel", "final"})
+    return (
+        local(state) == "parallel"
+        or bool(children(state, *_STATES))
+        or bool(sg(state, "submachine"))
+    )

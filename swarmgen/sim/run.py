@@ -65,11 +65,14 @@ def outputs(sim: Simulation) -> dict[str, bytes]:
     return files
 
 
-def write_outputs(files: Mapping[str, bytes], out_dir: Path, source: str) -> None:
-    """Make `out_dir` hold exactly `files` and their manifest, under the rules of
-    `swarmgen.outtree` (only swarmgen's own unedited files are replaced; crash-safe)."""
+def write_outputs(
+    files: Mapping[str, bytes], out_dir: Path, source: str, command: str = "simulate"
+) -> None:
+    """Make `out_dir` hold exactly `files` and their manifest (written by `command`: simulate
+    or optimize), under the rules of `swarmgen.outtree` (only swarmgen's own unedited files
+    are replaced; crash-safe)."""
     tree: dict[PurePosixPath, str | bytes] = {PurePosixPath(n): d for n, d in files.items()}
-    tree[PurePosixPath(outtree.MANIFEST)] = outtree.manifest_text("simulate", source, tree)
+    tree[PurePosixPath(outtree.MANIFEST)] = outtree.manifest_text(command, source, tree)
     outtree.write(tree, out_dir)
 
 
