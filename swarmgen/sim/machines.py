@@ -63,24 +63,26 @@ def compile_variants(
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         raise SimulationError(dg.refusal_line(model, validation.diagnostics))
-    return [_machines(model, validation, overrides) for overrides in data]
+    return [machines_of(model, validation, overrides) for overrides in data]
 
 
-def _machines(
-    model: Path, validation: Validation, data: Mapping[str, Mapping[str, Any]]
+def machines_of(
+    model: Path, validation: Validation, data: Mapping[str, Mapping[str, Any]] | None = None
 ) -> Machines:
+    """The member modules of a model validated without errors (`data`: defaults in place of
+    the model's, as in `compile_variants`)."""
     from swarmgen import __version__
     from swarmgen.backends.asyncio_backend import render_member
     from swarmgen.ir.query import composition as swarm_composition
 
-    assert validation.model is not None  # compile_machines refused the others
+    assert validation.model is not None  # the caller refused the others
     common = {"version": __version__, "source": model.name, "runtime": "swarmgen.runtime"}
     members = []
     for chart in validation.charts:  # lowered once, by validate
         if chart.member is None:
             continue  # a stand-alone machine: no member runs it
         member = chart.member
-        chart = _with_defaults(chart, data.get(member, {}))
+        chart = _with_defaults(chart, (data or {}).get(member, {}))
         members.append(
             MemberMachine(
                 member,
@@ -125,10 +127,16 @@ def build_chart(machine: MemberMachine) -> tuple[Chart, dict[str, str]]:
     """Run the generated module and its `build()` (once per process)."""
     key = hashlib.sha256(machine.code.encode()).hexdigest()
     if key not in _BUILT:
-        namespace: dict[str, Any] = {"__name__": f"swarmgen_sim_{machine.chart_name}"}
-        exec(compile(machine.code, f"<generated {machine.chart_name}>", "exec"), namespace)
-        _BUILT[key] = (namespace["build"](), dict(namespace["EVENT_SCOPES"]))
+        _BUILT[key] = run_module(machine)
     return _BUILT[key]
+
+
+def run_module(machine: MemberMachine) -> tuple[Chart, dict[str, str]]:
+    """A new chart from the generated module's `build()`, and its event scopes. The code is
+    swarmgen's own rendering (model text only in string literals)."""
+    namespace: dict[str, Any] = {"__name__": f"swarmgen_sim_{machine.chart_name}"}
+    exec(compile(machine.code, f"<generated {machine.chart_name}>", "exec"), namespace)
+    return namespace["build"](), dict(namespace["EVENT_SCOPES"])
 
 
 def waited_outcomes(chart: Chart) -> dict[str, frozenset[str]]:

@@ -7,13 +7,11 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 from swarmgen import diagnostics as dg
 from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import FinalState, Model, State
 from swarmgen.ir.query import composition, walk
-from swarmgen.runtime.chart import Chart
 from swarmgen.span import Span
 from swarmgen.verify.system import System, make_kind
 
@@ -60,19 +58,21 @@ def load(
     """Validate the model and compose its swarm; `members` overrides counts of the model's
     swarm, `abort` names the abort events (default: `missionAbort` when the model has it)."""
     from swarmgen import pipeline
-    from swarmgen.sim.machines import compile_machines
+    from swarmgen.sim.machines import machines_of, run_module
 
     validation = pipeline.validate(path, interfaces)
     loaded = Loaded(path, list(validation.diagnostics), validation.model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         return loaded
     model = validation.model
-    machines = compile_machines(path)
+    machines = machines_of(path, validation)  # validated once, above
     counts = _counts(composition(model), members or {}, machines.types())
     emits = {b.name: b.emits for b in model.behaviours}
     kinds = []
     for machine in machines.members:
-        chart, scopes = _own_chart(machine.chart_name, machine.code)
+        # a chart of its own: the verifier instruments its entries, so it cannot share
+        # `sim.machines.build_chart`'s copy
+        chart, scopes = run_module(machine)
         kind_emits = {b: emits.get(b, ()) for b in machine.outputs}
         kinds.append(make_kind(machine.member_type, chart, scopes, kind_emits))
         loaded.names[machine.member_type] = dict(chart.names)
@@ -135,13 +135,3 @@ def event_span(model: Model, name: str) -> Span:
 def swarm_span(model: Model) -> Span:
     """Where the (first) swarm composition is declared."""
     return model.swarms[0].span if model.swarms else Span(file=model.source)
-
-
-def _own_chart(name: str, code: str) -> tuple[Chart, dict[str, str]]:
-    """The chart of a generated member module (the asyncio backend's, importing
-    `swarmgen.runtime`), built afresh: the verifier instruments its entries, so it cannot share
-    `sim.machines.build_chart`'s copy. The code is swarmgen's own rendering (model text only in
-    string literals), as `simulate` runs it."""
-    namespace: dict[str, Any] = {"__name__": f"swarmgen_verify_{name}"}
-    exec(compile(code, f"<generated {name}>", "exec"), namespace)
-    return namespace["build"](), dict(namespace["EVENT_SCOPES"])
