@@ -31,7 +31,8 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from swarmgen.runtime.transport import Endpoint, Options, Seen  # noqa: E402
+from swarmgen.runtime.netoptions import Options  # noqa: E402
+from swarmgen.runtime.transport import Endpoint, Seen  # noqa: E402
 
 END = "benchEnd"
 TIMEOUT = 60.0

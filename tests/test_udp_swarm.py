@@ -6,90 +6,43 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import socket
 import subprocess
-import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from swarmgen import pipeline
+from swarmgen.runtime.faults import Faults
+from swarmgen.runtime.netoptions import Options, params_options
 from swarmgen.runtime.transport import (
     SEEN_LIMIT,
-    Faults,
-    Options,
     Seen,
     WireError,
     decode,
     encode,
     multicast_socket,
-    params_options,
 )
 from tests.skips import PRIVILEGE_REASON
+from tests.udpkit import (
+    EVENTS,
+    FINAL,
+    MEMBERS,
+    RUN_TIMEOUT,
+    SCALE,
+    STATION_EVENTS,
+    Steps,
+    delivered,
+    expected,
+    final_states,
+    network,
+    package,
+    python,
+    sequences,
+    unique,
+)
 
-ROOT = Path(__file__).resolve().parent.parent
-SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
-PACKAGE = "search_and_rescue_swarm"
-MEMBERS = [("UAV", f"uav_{n}") for n in range(1, 5)] + [("UGV", f"ugv_{n}") for n in (1, 2)]
-EVENTS = "launch@0.2,missionStart@1,missionAbort@2"
-SCALE = "0.1"
-STATION_EVENTS = ("launch", "missionStart", "missionAbort")
-FINAL = {"UAV": ["Landed"], "UGV": ["Stopped"]}
-RUN_TIMEOUT = 40  # seconds any process of a test may live
-
-
-@pytest.fixture(scope="module")
-def package(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The SAR sample compiled with this tree's runtime: the directory holding the package."""
-    out = tmp_path_factory.mktemp("sar_udp")
-    compiled = pipeline.compile_model(SAR)
-    assert compiled.files, "the SAR sample has errors"
-    pipeline.write_tree(compiled.files, out)
-    return out / "asyncio"
-
-
-_counter = iter(range(1, 10_000))
-
-
-def network() -> list[str]:
-    """A group and port of this test alone: a free UDP port, and a group named by it and by
-    the process (parallel runs do not hear each other)."""
-    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-    group = f"239.255.{os.getpid() % 250 + 1}.{next(_counter) % 250 + 1}"
-    return ["--transport", "udp", "--group", group, "--port", str(port)]
-
-
-def python(*args: str) -> list[str]:
-    return [sys.executable, "-m", PACKAGE, *args]
-
-
-def in_process_trace(package: Path) -> dict[str, list[tuple[str | None, list[str]]]]:
-    """The reference: the whole swarm in one process on the in-memory bus."""
-    command = python("--swarm", "--events", EVENTS, "--time-scale", SCALE)
-    run = subprocess.run(
-        [*command, "--duration", "8"],
-        cwd=package,
-        capture_output=True,
-        text=True,
-        timeout=RUN_TIMEOUT,
-        check=False,
-    )
-    assert run.returncode == 0, run.stderr
-    return sequences(run.stdout)
-
-
-def sequences(text: str) -> dict[str, list[tuple[str | None, list[str]]]]:
-    """Per member, its (event, active states) steps: what is deterministic in a trace."""
-    found: dict[str, list[tuple[str | None, list[str]]]] = {}
-    for line in text.splitlines():
-        step = json.loads(line)
-        if "event" in step:
-            found.setdefault(step["member"], []).append((step["event"], step["active"]))
-    return found
+__all__ = ["expected", "package"]  # fixtures
 
 
 def run_swarm(
@@ -99,7 +52,7 @@ def run_swarm(
     station: list[str],
     meanwhile: Callable[[], None] | None = None,
     where: Callable[[int], tuple[list[str], list[str]]] = lambda n: ([], []),
-) -> tuple[dict[str, list[tuple[str | None, list[str]]]], list[dict[str, Any]], str]:
+) -> tuple[Steps, list[dict[str, Any]], str]:
     """Six member processes, then (after `meanwhile`) a station on the group: the members'
     merged trace, the station's record, and the members' stderr. `where(n)`: the command
     prefix and extra arguments of process n (the station is the last)."""
@@ -143,16 +96,6 @@ def run_swarm(
     return sequences("".join(out for out, _ in outputs)), lines, "".join(e for _, e in outputs)
 
 
-def delivered(record: list[dict[str, Any]]) -> list[str]:
-    return [line["event"] for line in record if line["station"] == "delivered"]
-
-
-def final_states(record: list[dict[str, Any]]) -> dict[str, tuple[str, list[str], bool]]:
-    """The station's summary: where it heard each member end."""
-    (last,) = [line for line in record if line["station"] == "summary"]
-    return {m: (v["type"], v["active"], v["finished"]) for m, v in last["members"].items()}
-
-
 EVERY_FINAL = {member_id: (kind, FINAL[kind], True) for kind, member_id in MEMBERS}
 GARBAGE = [
     b"not json",
@@ -190,11 +133,12 @@ def hear_and_spoil(net: list[str]) -> Callable[[], None]:
     return run
 
 
-def test_members_in_processes_run_the_in_process_mission(package: Path, tmp_path: Path) -> None:
+def test_members_in_processes_run_the_in_process_mission(
+    package: Path, expected: Steps, tmp_path: Path
+) -> None:
     """Six processes and a station: each member's steps are those of the `--swarm` run; the
     station heard every member and where it ended. Garbage on the group is counted and logged
     by every member and breaks nothing; a station event's data travels with it."""
-    expected = in_process_trace(package)
     script = tmp_path / "station.json"
     items = [{"event": "launch", "at": 0.2, "data": {"note": "go", "n": [1, 2.5]}}]
     items += [{"event": "missionStart", "at": 1}, {"event": "missionAbort", "at": 2}]
@@ -212,10 +156,9 @@ def test_members_in_processes_run_the_in_process_mission(package: Path, tmp_path
         assert f"/{member_id}: bad datagram {len(GARBAGE)} from" in stderr, stderr
 
 
-def test_duplicated_delayed_datagrams_change_nothing(package: Path) -> None:
+def test_duplicated_delayed_datagrams_change_nothing(package: Path, expected: Steps) -> None:
     """Copies and reordering of datagrams (members and station): every event is still taken
     once, in order, so the traces are those of the in-process run."""
-    expected = in_process_trace(package)
     faults = ["--duplicate", "0.5", "--delay", "0.03"]
     merged, record, _ = run_swarm(package, network(), faults, ["--events", EVENTS, *faults])
     assert merged == expected
@@ -332,7 +275,7 @@ def test_a_member_that_hears_nothing_is_never_acknowledged(package: Path) -> Non
     member never takes `launch`."""
     net = network()
     member = subprocess.Popen(
-        [*python("--member", "UGV", "--id", "deaf", *net, "--drop", "1"), "--duration", "4"],
+        [*python("--member", "UGV", "--id", "deaf", *net, "--drop", "1"), "--duration", "3"],
         cwd=package,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -380,7 +323,7 @@ def two_robots() -> Iterator[list[tuple[str, str]]]:
     reason = netns_available() if shutil.which("ip") else f"{PRIVILEGE_REASON}: no `ip` command"
     if reason is not None:
         pytest.skip(reason)
-    tag = f"{os.getpid() % 100_000}{next(_counter)}"
+    tag = f"{os.getpid() % 100_000}{unique()}"
     spaces = [(f"sg{tag}a", "10.213.0.1"), (f"sg{tag}b", "10.213.0.2")]
     ends = [f"sg{tag}va", f"sg{tag}vb"]
     try:
@@ -404,11 +347,10 @@ def ip(*args: str) -> None:
 
 
 def test_members_in_two_namespaces_run_the_in_process_mission(
-    package: Path, two_robots: list[tuple[str, str]]
+    package: Path, expected: Steps, two_robots: list[tuple[str, str]]
 ) -> None:
     """Two "robots" (network namespaces over a veth pair, multicast on the link): the UAVs and
     the station on one, the UGVs on the other; the traces are those of the in-process run."""
-    expected = in_process_trace(package)
 
     def where(n: int) -> tuple[list[str], list[str]]:
         name, address = two_robots[n < len(MEMBERS) and MEMBERS[n][0] == "UGV"]

@@ -26,6 +26,8 @@ RUNTIME_MODULES = (
     "cli",
     "replay",
     "plugins",
+    "faults",
+    "netoptions",
     "transport",
     "station",
 )

@@ -1,58 +1,63 @@
-"""The ground station of a swarm on UDP multicast, and the command-line options of the network
-transport (standard library only).
+"""The ground station of a swarm on UDP multicast (standard library only).
 
     python -m <package> --station-only --events launch@0.1,missionStart@1 --expect 6 --record run.jsonl
 
-The station waits until it has heard `--expect` members (their announcements), then sends its
-events in order, each not before its time and not before the previous one was acknowledged by
-every live member it heard; it repeats an event every `--repeat` seconds until it is. Members
-suppress the copies by event id, so each member takes each station event at most once, and in
-the station's order. A member is live while its announcements keep coming (`--peer-timeout`)
-and it has not announced that it finished. The station lists the members it hears with their
-active states, and records the run as JSON lines (docs/network.md).
+The station waits until it has heard `--expect` members (their announcements), then starts its
+clock, the mission clock. Each event of its script is released at its time into the station's
+log, numbered from 1. Every member incarnation the station hears (a process of a member: a
+restarted member is a new one) is brought through the log in order, each event repeated every
+`--repeat` seconds until that incarnation acknowledged it, and the next one sent not before its
+time nor sooner after the previous one's acknowledgement than the script spaces them: a member
+heard late (started late, restarted, back from a partition) gets the events it lacks with the
+mission's spacing. A member is live while its announcements keep coming (`--peer-timeout`) and
+it has not announced that it finished; only live members are sent to. The station lists the
+members it hears with their active states, and records the run as JSON lines (docs/network.md).
 """
 
 from __future__ import annotations
 
-import argparse
 import asyncio
 import json
-import sys
+import math
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
-from types import ModuleType
 from typing import Any, TextIO
 
-from swarmgen.runtime.transport import (
-    ANNOUNCE_EVERY,
-    Endpoint,
-    Faults,
-    Options,
-    Peer,
-    check_options,
-    finite_rate,
-    params_options,
-)
-
-REPEAT_EVERY = 0.1  # seconds between two copies of an unacknowledged station event
-PEER_TIMEOUT = 1.0  # a member not heard for this long is no longer waited for
-MAX_SCRIPT_BYTES = 1_000_000
+from swarmgen.runtime.faults import Faults
+from swarmgen.runtime.netoptions import PEER_TIMEOUT, REPEAT_EVERY, Options
+from swarmgen.runtime.transport import Endpoint, Peer
 
 
 @dataclass(slots=True)
-class Pending:
-    """A station event on its way: who acknowledged it so far."""
+class Logged:
+    """A station event released into the log: who acknowledged it, and its copies."""
 
     name: str
     data: Mapping[str, Any] | None
-    id: int
-    acked: set[str] = field(default_factory=set)
+    id: int  # its place in the log, from 1
+    at: float  # its time on the mission clock
+    acked: list[str] = field(default_factory=list)  # member ids, in acknowledgement order
+    addressed: set[str] = field(default_factory=set)  # the incarnations it was sent to
+    last_copy: float = -math.inf  # mission time of the last copy
+    last_to: frozenset[str] = frozenset()
+    delivered: bool = False  # the record's `delivered` line is written
+
+
+@dataclass(slots=True)
+class Follower:
+    """A member incarnation and how far it went through the log."""
+
+    member_id: str
+    origin: str
+    taken: int = 0  # the events it acknowledged (all of the log's first `taken`)
+    sent_at: float | None = None  # mission time the next event was first sent to it
+    last_sent_at: float = 0.0  # mission time the last event it took was first sent to it
 
 
 class Station(Endpoint):
-    """Sends the station's events to the group until every live member acknowledged them, and
-    records what it sends and hears."""
+    """Brings every live member incarnation through the log of station events, and records
+    what it sends and hears."""
 
     def __init__(
         self,
@@ -67,17 +72,31 @@ class Station(Endpoint):
         self.repeat = repeat
         self.peer_timeout = peer_timeout
         self.start = time.monotonic()
-        self.pending: Pending | None = None
-        self.next_id = 1
+        self.started: float | None = None  # time.monotonic() the mission clock started
+        self.log: list[Logged] = []
+        self.followers: dict[str, Follower] = {}
         self.changed = asyncio.Event()  # an ack or an announcement arrived
         # what the record last said of each member: active states, finished
         self.heard: dict[str, tuple[tuple[str, ...], bool]] = {}
         self.on_peer = self._peer
 
+    def receivers(self) -> Collection[str]:
+        """The station is one side of a partition under the name `station`."""
+        return ("station",)
+
     def write(self, what: str, **fields: Any) -> None:
         """One line of the record."""
         line = {"t": round(time.monotonic() - self.start, 4), "station": what, **fields}
         print(json.dumps(line), file=self.out, flush=True)
+
+    def now(self) -> float:
+        """Seconds on the mission clock (0 before it starts)."""
+        return 0.0 if self.started is None else time.monotonic() - self.started
+
+    def start_clock(self) -> None:
+        """Start the mission clock; every event sent from now on carries its start."""
+        self.started, self.clock = time.monotonic(), time.time()
+        self.write("clock", members=sorted(self.peers), at=self.clock)
 
     def _peer(self, peer: Peer) -> None:
         known = self.heard.get(peer.member_id)
@@ -85,17 +104,28 @@ class Station(Endpoint):
             member = f"{peer.member_type}/{peer.member_id}"
             self.write("heard", member=member, active=list(peer.active), finished=peer.finished)
         self.heard[peer.member_id] = (peer.active, peer.finished)
+        follower = self.followers.get(peer.member_id)
+        if follower is None or follower.origin != peer.origin:
+            if follower is not None:  # a restarted member: it starts the log again
+                self.write("rejoined", member=f"{peer.member_type}/{peer.member_id}")
+            self.followers[peer.member_id] = Follower(peer.member_id, peer.origin)
         self.changed.set()
 
     def handle(self, message: dict[str, Any]) -> None:
-        """Count an acknowledgement of the event on its way."""
-        pending = self.pending
-        if message["kind"] != "ack" or pending is None:
+        """Count an acknowledgement: of this station, by the member's current incarnation,
+        of the next event it lacked."""
+        if message["kind"] != "ack" or message["of"] != self.origin:
             return
-        if message["of"] == self.origin and message["id"] == pending.id:
-            if message["sender"] not in pending.acked:
-                pending.acked.add(message["sender"])
-                self.write("acked", event=pending.name, id=pending.id, by=message["sender"])
+        follower = self.followers.get(message["sender"])
+        if follower is None or follower.origin != message["origin"]:
+            return  # an incarnation not heard yet, or a stopped one
+        if message["id"] == follower.taken + 1 and follower.taken < len(self.log):
+            entry = self.log[follower.taken]
+            follower.taken += 1
+            follower.last_sent_at = self.now() if follower.sent_at is None else follower.sent_at
+            follower.sent_at = None
+            entry.acked.append(follower.member_id)
+            self.write("acked", event=entry.name, id=entry.id, by=follower.member_id)
             self.changed.set()
 
     def live(self) -> set[str]:
@@ -107,39 +137,67 @@ class Station(Endpoint):
             if not p.finished and now - p.seen <= self.peer_timeout
         }
 
-    async def wait_for(self, count: int, until: float) -> bool:
-        """Wait until `count` members were heard (False: not before `until`)."""
-        while len(self.peers) < count:
-            if not await self._changed(until):
-                return False
-        return True
+    def release(self, name: str, data: Mapping[str, Any] | None, at: float) -> None:
+        """Put the next event of the script into the log (at its time)."""
+        entry = Logged(name, data, len(self.log) + 1, at)
+        self.log.append(entry)
+        self.write("sent", event=name, id=entry.id, data=data, to=sorted(self.live()))
 
-    async def send_event(self, name: str, data: Mapping[str, Any] | None, until: float) -> bool:
-        """Send one event until every live member acknowledged it (False: not before
-        `until`)."""
-        pending = self.pending = Pending(name, data, self.next_id)
-        self.next_id += 1
-        copies = 0
-        while True:
-            missing = self.live() - pending.acked
-            if copies and not missing:
-                self.write("delivered", event=name, id=pending.id, members=sorted(pending.acked))
-                self.pending = None
-                return True
-            if time.monotonic() >= until:
-                self.write("undelivered", event=name, id=pending.id, missing=sorted(missing))
-                self.pending = None
-                return False
-            self.send(
-                {"kind": "event", "id": pending.id, "name": name, "sender": "station",
-                 "timestamp": time.time(), "data": dict(data) if data else None}
-            )  # fmt: skip
-            copies += 1
-            if copies == 1:
-                self.write("sent", event=name, id=pending.id, data=data, to=sorted(missing))
-            await self._changed(min(until, time.monotonic() + self.repeat))
+    def due_at(self, follower: Follower) -> float:
+        """When the next event `follower` lacks may go to it: its time, and not sooner after
+        the one before was first sent to it than the script spaces the two (a member heard
+        late gets the mission's events with the mission's spacing)."""
+        entry = self.log[follower.taken]
+        if follower.taken == 0:
+            return entry.at
+        before = self.log[follower.taken - 1]
+        return max(entry.at, follower.last_sent_at + entry.at - before.at)
 
-    async def _changed(self, until: float) -> bool:
+    def pump(self) -> float:
+        """Send what is due (a copy per event, addressed to the members due for it; again
+        after `repeat` seconds), write the `delivered` lines; the mission time to look again."""
+        now, live = self.now(), self.live()
+        wake = now + self.repeat
+        due: dict[int, set[str]] = {}
+        for follower in self.followers.values():
+            if follower.member_id not in live or follower.taken >= len(self.log):
+                continue
+            at = self.due_at(follower)
+            if at <= now:
+                due.setdefault(follower.taken, set()).add(follower.member_id)
+            else:
+                wake = min(wake, at)
+        for index, members in sorted(due.items()):
+            self._copy(self.log[index], frozenset(members), now)
+        for entry in self.log:
+            lacking = {f.member_id for f in self.followers.values() if f.taken < entry.id}
+            if not entry.delivered and not lacking & live:
+                entry.delivered = True
+                self.write("delivered", event=entry.name, id=entry.id, members=entry.acked)
+        return wake
+
+    def _copy(self, entry: Logged, to: frozenset[str], now: float) -> None:
+        if not to - entry.last_to and now - entry.last_copy < self.repeat:
+            return  # those members have a copy on its way
+        for member_id in to:
+            follower = self.followers[member_id]
+            if follower.sent_at is None:
+                follower.sent_at = now
+        origins = {self.followers[m].origin: m for m in to}
+        new = sorted(m for o, m in origins.items() if o not in entry.addressed)
+        if new and entry.addressed:  # incarnations not there when it was first sent
+            self.write("resent", event=entry.name, id=entry.id, to=new)
+        entry.addressed |= origins.keys()
+        entry.last_copy, entry.last_to = now, to
+        self.send(
+            {"kind": "event", "id": entry.id, "name": entry.name, "sender": "station",
+             "timestamp": time.time(), "data": dict(entry.data) if entry.data else None,
+             "to": sorted(to), "clock": self.clock}
+        )  # fmt: skip
+
+    async def wait(self, until: float) -> bool:
+        """Wait for an ack or an announcement, until the monotonic time `until` (False: none
+        came)."""
         self.changed.clear()
         try:
             await asyncio.wait_for(self.changed.wait(), max(0.0, until - time.monotonic()))
@@ -151,13 +209,26 @@ class Station(Endpoint):
         """Every member heard has finished or gone silent."""
         return not self.live()
 
+    def undelivered(self, unreleased: Sequence[tuple[float, str, Any]]) -> bool:
+        """Write an `undelivered` line per event some live member lacks (True: none)."""
+        live, ok = self.live(), True
+        for entry in self.log:
+            missing = sorted(m for m in live if self.followers[m].taken < entry.id)
+            if missing:
+                self.write("undelivered", event=entry.name, id=entry.id, missing=missing)
+                ok = False
+        for _, name, _ in unreleased:
+            self.write("undelivered", event=name, id=None, missing=sorted(live))
+            ok = False
+        return ok
+
     def summary(self) -> dict[str, Any]:
         """The members heard, their last active states, and the datagram counts."""
         members = {
             p.member_id: {"type": p.member_type, "active": list(p.active), "finished": p.finished}
             for p in sorted(self.peers.values(), key=lambda p: p.member_id)
         }
-        return {"members": members, "bad": self.bad, "unsent": self.unsent}
+        return {"members": members, "bad": self.bad, "unsent": self.unsent, "cut": self.cut}
 
 
 async def run_station(
@@ -168,155 +239,50 @@ async def run_station(
 ) -> int:
     """Run the station for `--duration` seconds at most: 0 when every event reached every live
     member and every member heard finished, 1 otherwise."""
-    station = Station(options, out, _faults(args), args.repeat, args.peer_timeout)
+    faults = Faults(args.drop, args.duplicate, args.delay, args.fault_seed, tuple(args.partition))
+    station = Station(options, out, faults, args.repeat, args.peer_timeout)
     deadline = time.monotonic() + args.duration
     await station.open()
+    schedule = list(events)
     try:
-        ok = await station.wait_for(args.expect, deadline)
+        ok = await _wait_for(station, args.expect, deadline)
         if not ok:
             station.write("missing", expected=args.expect, heard=sorted(station.peers))
-        started = time.monotonic()
-        station.write("clock", members=sorted(station.peers))
-        for at, name, data in events if ok else ():
-            await asyncio.sleep(max(0.0, started + at - time.monotonic()))
-            ok = await station.send_event(name, data, deadline) and ok
-        while not station.settled() and time.monotonic() < deadline:
-            # listen on: the members' last announcements say where they ended
-            await station._changed(min(deadline, time.monotonic() + station.peer_timeout))
+        else:
+            station.start_clock()
+            await _mission(station, schedule, deadline)
+        ok = station.undelivered(schedule) and ok
     finally:
         station.write("summary", **station.summary())
         station.close()
     return 0 if ok and _all_finished(station) else 1
 
 
+async def _wait_for(station: Station, count: int, until: float) -> bool:
+    """Wait until `count` members were heard (False: not before `until`)."""
+    while len(station.peers) < count:
+        if not await station.wait(until):
+            return False
+    return True
+
+
+async def _mission(
+    station: Station, schedule: list[tuple[float, str, Any]], deadline: float
+) -> None:
+    """Release the script's events at their times and bring every member through them, until
+    the script is done and every member heard finished or went silent (or the deadline)."""
+    while time.monotonic() < deadline:
+        while schedule and schedule[0][0] <= station.now():
+            at, name, data = schedule.pop(0)
+            station.release(name, data, at)
+        wake = station.pump()
+        if not schedule and station.settled():
+            return
+        if schedule:
+            wake = min(wake, schedule[0][0])
+        # the members' announcements (their last ones say where they ended) and acks wake it
+        await station.wait(min(deadline, time.monotonic() + max(0.0, wake - station.now())))
+
+
 def _all_finished(station: Station) -> bool:
     return bool(station.peers) and all(p.finished for p in station.peers.values())
-
-
-def _faults(args: Any) -> Faults:
-    return Faults(args.drop, args.duplicate, args.delay, args.fault_seed)
-
-
-def load_script(path: str, known: Callable[[str], bool]) -> list[tuple[float, str, Any]]:
-    """`[{"event": "launch", "at": 0.1, "data": {...}}, ...]` from a JSON file, sorted by time;
-    ValueError names the first bad item."""
-    try:
-        with open(path, "rb") as stream:
-            raw = stream.read(MAX_SCRIPT_BYTES + 1)
-    except OSError as err:
-        raise ValueError(f"cannot read {path}: {err.strerror}") from None
-    if len(raw) > MAX_SCRIPT_BYTES:
-        raise ValueError(f"{path}: larger than {MAX_SCRIPT_BYTES} bytes")
-    try:
-        items = json.loads(raw, parse_constant=_refuse)
-    except (ValueError, RecursionError) as err:
-        raise ValueError(f"{path}: not JSON: {str(err)[:80]}") from None
-    if not isinstance(items, list):
-        raise ValueError(f"{path}: expected a list of events")
-    events = []
-    for n, item in enumerate(items):
-        where = f"{path}: item {n}"
-        if not isinstance(item, dict) or set(item) - {"event", "at", "data"}:
-            raise ValueError(f"{where}: expected an object with event, at, data")
-        name, at, data = item.get("event"), item.get("at", 0), item.get("data")
-        if not isinstance(name, str) or not known(name):
-            raise ValueError(f"{where}: no member reacts to an event {name!r}")
-        if isinstance(at, bool) or not isinstance(at, int | float) or at < 0:
-            raise ValueError(f"{where}: `at` is not a number of seconds >= 0")
-        if data is not None and not isinstance(data, dict):
-            raise ValueError(f"{where}: `data` is not an object")
-        events.append((float(at), name, data))
-    return sorted(events, key=lambda e: e[0])
-
-
-def _refuse(name: str) -> Any:
-    raise ValueError(f"non-finite number {name}")
-
-
-def add_arguments(parser: argparse.ArgumentParser, who: Any) -> None:
-    """The network options of the generated command line (`who`: its member/swarm group)."""
-    who.add_argument(
-        "--station-only", action="store_true", help="run the ground station on --transport udp"
-    )
-    net = parser.add_argument_group("network (--transport udp)")
-    net.add_argument("--transport", choices=("memory", "udp"), default="memory")
-    net.add_argument("--group", default=None, help="IPv4 multicast group")
-    net.add_argument("--port", type=_int_type(1, 65_535), default=None, help="UDP port")
-    net.add_argument("--ttl", type=_int_type(0, 255), default=None, help="multicast TTL")
-    net.add_argument("--interface", default=None, help="address of the interface to use")
-    net.add_argument("--announce", type=_positive, default=ANNOUNCE_EVERY, help="seconds")
-    net.add_argument("--expect", type=_int_type(0, 10_000), default=0, help="station: members")
-    net.add_argument("--repeat", type=_positive, default=REPEAT_EVERY, help="station: seconds")
-    net.add_argument("--peer-timeout", type=_positive, default=PEER_TIMEOUT, help="seconds")
-    net.add_argument("--station-script", default=None, help="station: JSON events with data")
-    net.add_argument("--record", default=None, help="station: write the record to this file")
-    net.add_argument("--drop", type=_rate, default=0.0, help="fault: datagram loss 0-1")
-    net.add_argument("--duplicate", type=_rate, default=0.0, help="fault: duplication 0-1")
-    net.add_argument("--delay", type=_non_negative, default=0.0, help="fault: max delay (s)")
-    net.add_argument("--fault-seed", type=_int_type(0, 2**63), default=0, help="fault: seed")
-
-
-def resolve_options(args: Any, member_types: Mapping[str, ModuleType]) -> Options:
-    """The network options: the defaults, then the model's `communicationParams` (a member
-    module's COMMUNICATION_PARAMS, when the package has them), then the command line.
-    ValueError when they are not usable."""
-    base = Options(announce_every=args.announce)
-    module = member_types.get(args.member) if args.member else None
-    params = getattr(module, "COMMUNICATION_PARAMS", "") if module is not None else ""
-    if isinstance(params, str) and params:
-        base = params_options(params, base)
-    given = {k: getattr(args, k) for k in ("group", "port", "ttl", "interface")}
-    options = Options(
-        **{**{k: getattr(base, k) for k in Options.__dataclass_fields__}, **_set(given)}
-    )
-    check_options(options)
-    return options
-
-
-def _set(values: Mapping[str, Any]) -> dict[str, Any]:
-    return {k: v for k, v in values.items() if v is not None}
-
-
-def _int_type(low: int, high: int) -> Callable[[str], int]:
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"expected {low}-{high}, got {value}")
-        return value
-
-    return parse
-
-
-def _rate(text: str) -> float:
-    try:
-        return finite_rate(text)
-    except ValueError as err:
-        raise argparse.ArgumentTypeError(str(err)) from None
-
-
-def _number(text: str, positive: bool) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not (value > 0 if positive else value >= 0) or value == float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a finite number {'>' if positive else '>='} 0")
-    return value
-
-
-def _positive(text: str) -> float:
-    return _number(text, True)
-
-
-def _non_negative(text: str) -> float:
-    return _number(text, False)
-
-
-def open_record(path: str | None) -> TextIO:
-    """Where the station writes its record: the file, else stdout."""
-    if path is None:
-        return sys.stdout
-    return open(path, "w", encoding="utf-8")  # closed by the caller

@@ -7,9 +7,10 @@ there is no static peer list. `UdpBus` is the member side: a `Bus` whose swarm-s
 the group (and to its own members at once, as `InMemoryBus` does), local-scope events stay in the
 process. Every datagram that fails to parse or to validate is counted and logged, never raised.
 
-The fault layer (`Faults`: loss, duplication, delay, seeded) acts where datagrams are received,
-so each receiver loses its own copies, as on a radio. Duplicates (the station repeats its
-events until they are acknowledged) are suppressed by event key in bounded memory (`Seen`).
+The fault layer (`faults.Faults`: loss, duplication, delay, partitions) acts where datagrams are
+received, so each receiver loses its own copies, as on a radio. Copies of a member's event are
+suppressed by event key in bounded memory (`Seen`); the station's events are numbered, and each
+member takes them in order, once (the station repeats them until they are acknowledged).
 """
 
 from __future__ import annotations
@@ -18,18 +19,19 @@ import asyncio
 import json
 import math
 import os
-import random
 import socket
 import struct
 import sys
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Callable, Collection, Mapping
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, cast
 
 from swarmgen.runtime.chart import record
+from swarmgen.runtime.faults import Faults
 from swarmgen.runtime.host import Event
+from swarmgen.runtime.netoptions import Options
 
 if TYPE_CHECKING:
     from swarmgen.runtime.member import Member
@@ -40,94 +42,15 @@ MAX_DATAGRAM = 65_507  # the largest UDP payload over IPv4
 RECEIVE_BUFFER = 4 * 1024 * 1024  # bytes asked for the socket's receive buffer
 SEEN_LIMIT = 4_096  # event keys remembered for duplicate suppression, per process
 MAX_LOGGED = 20  # bad datagrams logged on stderr (all are counted)
-DEFAULT_GROUP = "239.255.70.71"  # administratively scoped (RFC 2365): never routed off-site
-DEFAULT_PORT = 5670  # the SAR model's CommunicationInterface gives `port=5670`
-DEFAULT_TTL = 1  # one hop: the local network (0 would be this host only)
-DEFAULT_INTERFACE = "127.0.0.1"  # loopback unless told otherwise: nothing leaves the machine
 # the engine's own events (a behaviour's end, its outcome, SCXML's done.* and error.*): a
 # datagram naming one would forge a behaviour's end, so none comes from the network
 RESERVED = ("done.", "error.", "outcome.")
-ANNOUNCE_EVERY = 0.25  # seconds between two announcements
+STATIONS_KEPT = 64  # station incarnations whose event count a member keeps (bounded memory)
 LAST_WORDS = 3  # copies of a member's last announcement (its final states): one may be lost
 
 
 class WireError(ValueError):
     """A datagram that is not a message of the wire format (the text says why)."""
-
-
-@dataclass(frozen=True, slots=True)
-class Options:
-    """Where the swarm's datagrams go: multicast group, port, TTL, interface address."""
-
-    group: str = DEFAULT_GROUP
-    port: int = DEFAULT_PORT
-    ttl: int = DEFAULT_TTL
-    interface: str = DEFAULT_INTERFACE
-    announce_every: float = ANNOUNCE_EVERY
-
-
-def params_options(text: str, base: Options | None = None) -> Options:
-    """Options from a CommunicationInterface's `communicationParams` (`group=... port=...
-    ttl=...`, separated by spaces, commas or semicolons); other keys (`ifname`) are ignored,
-    bad values raise ValueError."""
-    values: dict[str, Any] = {}
-    for item in text.replace(",", " ").replace(";", " ").split():
-        key, _, value = item.partition("=")
-        if key == "group":
-            values["group"] = value
-        elif key in ("port", "ttl"):
-            values[key] = int(value)
-    options = Options(**{**_fields(base or Options()), **values})
-    check_options(options)
-    return options
-
-
-def _fields(options: Options) -> dict[str, Any]:
-    return {name: getattr(options, name) for name in Options.__dataclass_fields__}
-
-
-def check_options(options: Options) -> None:
-    """Raise ValueError unless the group is an IPv4 multicast address, the port 1-65535, the
-    TTL 0-255 and the interface an IPv4 address."""
-    try:
-        first = socket.inet_aton(options.group)[0]
-        socket.inet_aton(options.interface)
-    except OSError:
-        raise ValueError(f"not IPv4 addresses: {options.group!r}, {options.interface!r}") from None
-    if not 224 <= first <= 239 or options.group.count(".") != 3:
-        raise ValueError(f"not a multicast group (224.0.0.0-239.255.255.255): {options.group!r}")
-    if not 0 < options.port < 65_536:
-        raise ValueError(f"expected a port 1-65535, got {options.port}")
-    if not 0 <= options.ttl <= 255:
-        raise ValueError(f"expected a TTL 0-255, got {options.ttl}")
-
-
-@dataclass(slots=True)
-class Faults:
-    """Injected datagram faults (for tests), applied to each datagram received: dropped with
-    probability `drop`, else delivered twice with probability `duplicate`, each copy delayed
-    by a uniform 0-`delay` seconds (so datagrams overtake each other). Seeded: reproducible."""
-
-    drop: float = 0.0
-    duplicate: float = 0.0
-    delay: float = 0.0
-    seed: int = 0
-    rng: random.Random = field(init=False)
-
-    def __post_init__(self) -> None:
-        self.rng = random.Random(self.seed)
-
-    @property
-    def active(self) -> bool:
-        """Some fault is injected."""
-        return self.drop > 0 or self.duplicate > 0 or self.delay > 0
-
-    def copies(self) -> list[float]:
-        """The delays of the copies of one received datagram (none: it is lost)."""
-        if self.drop > 0 and self.rng.random() < self.drop:
-            return []
-        count = 2 if self.duplicate > 0 and self.rng.random() < self.duplicate else 1
-        return [self.rng.uniform(0.0, self.delay) if self.delay > 0 else 0.0 for _ in range(count)]
 
 
 class Seen:
@@ -185,6 +108,13 @@ def _no_constant(name: str) -> Any:
     raise ValueError(f"non-finite number {name}")
 
 
+def _finite(text: str) -> float:
+    value = float(text)  # `1e999` is infinity, and never passes through parse_constant
+    if not math.isfinite(value):
+        raise ValueError(f"non-finite number {text[:20]}")
+    return value
+
+
 _STR_FIELDS: dict[str, tuple[str, ...]] = {
     "event": ("origin", "name", "sender"),
     "ack": ("origin", "sender", "of"),
@@ -195,7 +125,9 @@ _STR_FIELDS: dict[str, tuple[str, ...]] = {
 def decode(payload: bytes) -> dict[str, Any]:
     """A datagram as a message of the wire format; WireError says why it is not one."""
     try:
-        message = json.loads(payload.decode("utf-8"), parse_constant=_no_constant)
+        message = json.loads(
+            payload.decode("utf-8"), parse_constant=_no_constant, parse_float=_finite
+        )
     except (UnicodeDecodeError, ValueError, RecursionError) as err:
         raise WireError(f"not JSON: {str(err)[:80]}") from None
     if not isinstance(message, dict):
@@ -215,19 +147,28 @@ def decode(payload: bytes) -> dict[str, Any]:
             raise WireError(f"event: the reserved name {_short(message['name'])}")
         if message.get("data") is not None and not isinstance(message["data"], dict):
             raise WireError("event: `data` is neither an object nor null")
-        if not isinstance(message.get("timestamp"), int | float) or isinstance(
-            message["timestamp"], bool
-        ):
+        if not _is_number(message.get("timestamp")):
             raise WireError("event: `timestamp` is not a number")
-    if kind == "announce":
-        active = message.get("active")
-        if not isinstance(active, list) or not all(isinstance(s, str) for s in active):
-            raise WireError("announce: `active` is not a list of strings")
+        if "clock" in message and not _is_number(message["clock"]):
+            raise WireError("event: `clock` is not a number")
+        to = message.get("to")
+        if to is not None and not _strings(to):
+            raise WireError("event: `to` is not a list of strings")
+    if kind == "announce" and not _strings(message.get("active")):
+        raise WireError("announce: `active` is not a list of strings")
     return message
 
 
 def _is_int(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _strings(value: Any) -> bool:
+    return isinstance(value, list) and all(isinstance(item, str) for item in value)
 
 
 def _short(value: Any) -> str:
@@ -290,6 +231,17 @@ class Endpoint(asyncio.DatagramProtocol):
         self.received = 0
         self.peers: dict[str, Peer] = {}
         self.on_peer: Callable[[Peer], None] | None = None
+        self.clock: float | None = None  # Unix time the mission clock started (the station's)
+        self.cut = 0  # datagrams a partition cut
+        self._cutting = False  # the last datagram from another process was cut
+
+    def receivers(self) -> Collection[str]:
+        """The ids of who receives here (a partition's side): the process's members."""
+        return ()
+
+    def mission_time(self) -> float | None:
+        """Seconds on the station's clock (None: no station heard yet)."""
+        return None if self.clock is None else time.time() - self.clock
 
     async def open(self) -> None:
         """Join the group (OSError when the network refuses)."""
@@ -339,9 +291,22 @@ class Endpoint(asyncio.DatagramProtocol):
         if not self.faults.active:
             self._take(message)
             return
+        if self._partitioned(message):
+            return
         loop = asyncio.get_running_loop()
         for delay in self.faults.copies():
             loop.call_later(delay, self._take, message)
+
+    def _partitioned(self, message: Mapping[str, Any]) -> bool:
+        """A partition cuts the datagram (counted; the cut's start and end logged)."""
+        now = self.mission_time()
+        cut = self.faults.cut(message["sender"], self.receivers(), now)
+        if cut != self._cutting:
+            self._cutting = cut
+            what = f"cut off from {message['sender']}" if cut else "hearing the others again"
+            print(f"{self.name}: partition: {what} at mission time {now:.3f}", file=sys.stderr)
+        self.cut += cut
+        return cut
 
     def _take(self, message: dict[str, Any]) -> None:
         if message["kind"] == "announce":
@@ -387,13 +352,17 @@ class Peer:
 class UdpBus(Endpoint):
     """A `Bus` over the group: swarm-scope events to every member of the swarm (this process's
     at once, the others by a datagram), local-scope events to the sender only. Station events
-    are acknowledged on every copy (the station repeats them until they are), delivered once."""
+    are taken in the station's order, each once, and acknowledged on every copy (the station
+    repeats them until they are)."""
 
     def __init__(self, options: Options, faults: Faults | None = None, name: str = "") -> None:
         super().__init__(options, faults, name)
         self.members: dict[str, Member] = {}
         self.seen = Seen()
+        # (station incarnation, member id) -> how many of that station's events it took
+        self.station_taken: OrderedDict[tuple[str, str], int] = OrderedDict()
         self.duplicates = 0
+        self.early = 0  # station events ignored: addressed to others, or not the next one
         self._announcer: asyncio.TimerHandle | None = None
 
     def attach(self, member: Member) -> None:
@@ -412,20 +381,48 @@ class UdpBus(Endpoint):
             member.deliver(event)
         self.send(event_message(event, self.origin))
 
+    def receivers(self) -> Collection[str]:
+        """The ids of this process's members."""
+        return self.members.keys()
+
     def handle(self, message: dict[str, Any]) -> None:
-        """Take another process's event (acknowledged when it is the station's)."""
+        """Take another process's event: a station event in the station's order, another
+        member's once."""
         if message["kind"] != "event":
             return
         if message["sender"] == "station":
-            for member_id in self.members:
-                self.send({"kind": "ack", "sender": member_id, "of": message["origin"],
-                           "id": message["id"]})  # fmt: skip
+            self._station_event(message)
+            return
         if not self.seen.first((message["origin"], message["sender"], message["id"])):
             self.duplicates += 1
             return
         event = message_event(message)
         for member in self.members.values():
             member.deliver(event)
+
+    def _station_event(self, message: dict[str, Any]) -> None:
+        """A station numbers its events 1, 2, ... (per station incarnation): each member takes
+        the next one it lacks and acknowledges it, acknowledges again the copies of those it
+        took, and ignores (without acknowledging) an event addressed to others or past the
+        next one, which the station sends again when it is that member's turn."""
+        origin, number, to = message["origin"], message["id"], message.get("to")
+        for member_id, member in self.members.items():
+            key = (origin, member_id)
+            taken = self.station_taken.get(key, 0)
+            if number > taken + 1 or (number > taken and to is not None and member_id not in to):
+                self.early += 1
+                continue
+            self.send({"kind": "ack", "sender": member_id, "of": origin, "id": number})
+            if number <= taken:
+                self.duplicates += 1
+                continue
+            self.station_taken[key] = number
+            self.station_taken.move_to_end(key)
+            if len(self.station_taken) > STATIONS_KEPT:
+                self.station_taken.popitem(last=False)
+            if "clock" in message:  # the mission clock of the station heard last
+                self.clock = float(message["clock"])
+            member.deliver(message_event(message))
 
     def start_announcing(self) -> None:
         """Announce every member now and every `announce_every` seconds."""
@@ -456,11 +453,3 @@ class UdpBus(Endpoint):
             for _ in range(LAST_WORDS):
                 self.announce()
         super().close()
-
-
-def finite_rate(text: str) -> float:
-    """A probability 0-1 (argparse type helper); ValueError otherwise."""
-    value = float(text)
-    if not math.isfinite(value) or not 0.0 <= value <= 1.0:
-        raise ValueError(f"expected a probability 0-1, got {text!r}")
-    return value

@@ -31,11 +31,12 @@ from typing import Any, NoReturn
 
 from .args import Parser, finite
 from .engine import Event
+from .faults import Faults
 from .member import CANCEL_GRACE, Fault, InMemoryBus, Library, Member
+from .netoptions import add_arguments, load_script, open_record, resolve_options
 from .plugins import Chain, PluginError, Plugins, load_factory
-from .station import add_arguments, load_script, open_record, resolve_options
 from .station import run_station as _run_station
-from .transport import Faults, UdpBus
+from .transport import UdpBus
 
 BEAT = 0.05  # seconds between the loop's heartbeats (what the watchdog thread watches)
 BLOCK_AFTER = 0.5  # a loop that misses its heartbeat this long is blocked by a behaviour
@@ -45,21 +46,27 @@ HARD_SLACK = 1.0  # seconds past duration + grace after which the process ends r
 class JsonTracer:
     """Writes the trace of a run as JSON lines: one per step, one per fault."""
 
-    def __init__(self, out: Any = sys.stdout) -> None:
+    def __init__(
+        self, out: Any = sys.stdout, clock: Callable[[], float | None] | None = None
+    ) -> None:
         self.out = out
         self.start = time.monotonic()
+        self.clock = clock  # the mission clock (on the network), when the process knows it
         self.lock = threading.Lock()  # the watchdog thread writes its last line too
 
     def step(self, member: Member, event: Event | None) -> None:
-        """Write a step: the time, the member, the event and the active states."""
-        self._write(
-            {
-                "t": round(time.monotonic() - self.start, 4),
-                "member": f"{member.member_type}/{member.member_id}",
-                "event": event.name if event is not None else None,
-                "active": member.active,
-            }
-        )
+        """Write a step: the time, the member, the event and the active states (and the
+        mission time, on the network once the station was heard)."""
+        line = {
+            "t": round(time.monotonic() - self.start, 4),
+            "member": f"{member.member_type}/{member.member_id}",
+            "event": event.name if event is not None else None,
+            "active": member.active,
+        }
+        mission = self.clock() if self.clock is not None else None
+        if mission is not None:
+            line["mission_t"] = round(mission, 4)
+        self._write(line)
 
     def fault(self, member: Member, fault: Fault, timeout: float = -1) -> None:
         """Write a behaviour fault (`timeout`: how long to wait for the lock)."""
@@ -169,9 +176,12 @@ def main(
     prog: str = "swarm",
     argv: list[str] | None = None,
     plugins: Plugins | None = None,
+    network: Mapping[str, Any] | None = None,
 ) -> int:
     """The generated package's command line: run members with simulated behaviours, the
-    installed plug-ins of `plugins` (entry points) or the `--library` given."""
+    installed plug-ins of `plugins` (entry points) or the `--library` given. `network`: the
+    swarm's network settings from the model (`group`, `port`, `ttl`), the defaults of the
+    `--transport udp` options."""
     parser = _parser(prog, member_types)
     args = parser.parse_args(argv)
     charts = {kind: module.build() for kind, module in member_types.items()}
@@ -179,7 +189,7 @@ def main(
         args.events = station_events(args.events, lambda name: _reacts(charts.values(), name))
     except ValueError as err:
         parser.error(f"argument --events: {err}")
-    _network_arguments(parser, args, member_types, charts)
+    _network_arguments(parser, args, network, charts)
     if args.station_only:
         return _station_only(args)
     if args.member:
@@ -254,7 +264,7 @@ async def _run(
     except OSError as err:
         print(f"{members[0][0]}/{members[0][1]}: the network refused: {err}", file=sys.stderr)
         return 1
-    tracer = JsonTracer()
+    tracer = JsonTracer(clock=bus.mission_time if isinstance(bus, UdpBus) else None)
     running = [
         Member(
             member_types[kind].build(),
@@ -298,12 +308,12 @@ async def _run(
 
 
 def _network_arguments(
-    parser: Parser, args: Any, member_types: Mapping[str, ModuleType], charts: Mapping[str, Any]
+    parser: Parser, args: Any, network: Mapping[str, Any] | None, charts: Mapping[str, Any]
 ) -> None:
     """Check the network options together (argparse checked each): exit 2 when they clash."""
     if args.transport == "udp" or args.station_only:
         try:
-            args.options = resolve_options(args, member_types)
+            args.options = resolve_options(args, network)
         except ValueError as err:
             parser.error(f"network options: {err}")
     if args.station_only:
@@ -344,7 +354,7 @@ async def _open_bus(args: Any) -> InMemoryBus | UdpBus:
     """The in-process bus, or the group (`--transport udp`) joined."""
     if args.transport != "udp":
         return InMemoryBus()
-    faults = Faults(args.drop, args.duplicate, args.delay, args.fault_seed)
+    faults = Faults(args.drop, args.duplicate, args.delay, args.fault_seed, tuple(args.partition))
     bus = UdpBus(args.options, faults, name=f"{args.member}/{args.id}")
     await bus.open()
     return bus
