@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from swarmgen.runtime.faults import Faults
+from swarmgen.runtime.faults import Faults, Partition, parse_partition
 from swarmgen.runtime.netoptions import Options, params_options
 from swarmgen.runtime.transport import (
     SEEN_LIMIT,
@@ -110,6 +110,13 @@ GARBAGE = [
     # a forged end of a behaviour: the engine's own events never come from the network
     b'{"version": 1, "kind": "event", "origin": "x", "name": "done.invoke.TakeOff.succeeded",'
     b' "sender": "uav_1", "id": 1, "timestamp": 0}',
+    # a station event addressed wrongly, with a mission clock that is no number, infinity
+    b'{"version": 1, "kind": "event", "origin": "x", "name": "launch", "sender": "station",'
+    b' "id": 1, "timestamp": 0, "to": "uav_1"}',
+    b'{"version": 1, "kind": "event", "origin": "x", "name": "launch", "sender": "station",'
+    b' "id": 1, "timestamp": 0, "clock": "noon"}',
+    b'{"version": 1, "kind": "event", "origin": "x", "name": "launch", "sender": "station",'
+    b' "id": 1, "timestamp": 1e999}',
 ]
 
 
@@ -211,6 +218,22 @@ def test_faults_are_seeded() -> None:
     assert 1_700 < lost < 2_300
 
 
+def test_partitions_cut_both_ways_in_their_window() -> None:
+    cut = parse_partition("uav_1,ugv_2@1.5-3")
+    assert (
+        cut == Partition(frozenset({"uav_1", "ugv_2"}), 1.5, 3.0)
+        and str(cut) == "uav_1,ugv_2@1.5-3"
+    )
+    assert cut.cuts("station", ["uav_1"], 2.0) and cut.cuts("uav_1", ["station"], 2.0)
+    assert not cut.cuts("ugv_2", ["uav_1"], 2.0)  # the same side
+    assert not cut.cuts("station", ["uav_1"], 1.0) and not cut.cuts("station", ["uav_1"], 3.0)
+    faults = Faults(partitions=(cut,))
+    assert faults.active and not faults.cut("station", ["uav_1"], None)  # no mission clock yet
+    for bad in ("uav_1", "@1-2", "uav_1@2-1", "uav_1@a-b", "uav_1@1-inf", "uav_1@1"):
+        with pytest.raises(ValueError):
+            parse_partition(bad)
+
+
 def test_communication_params_give_options() -> None:
     options = params_options("ifname=wlan0 port=5670, group=239.255.1.2;ttl=0")
     assert (options.group, options.port, options.ttl) == ("239.255.1.2", 5670, 0)
@@ -232,6 +255,10 @@ BAD_ARGUMENTS = {
     ),
     "port_zero": (["--member", "UAV", "--transport", "udp", "--port", "0"], "expected 1-65535"),
     "drop_rate": (["--member", "UAV", "--transport", "udp", "--drop", "1.5"], "probability"),
+    "partition": (
+        ["--member", "UAV", "--transport", "udp", "--partition", "uav_1@2-1"],
+        "argument --partition: 'uav_1@2-1': expected 0 <= START < END",
+    ),
     "script_missing": (
         ["--station-only", "--transport", "udp", "--station-script", "nowhere.json"],
         "cannot read nowhere.json",

@@ -15,6 +15,7 @@ from swarmgen.backends.pytypes import MODULE, render_types
 from swarmgen.backends.vendor import runtime_files
 from swarmgen.chart.model import Chart
 from swarmgen.generated import header
+from swarmgen.ir.network import swarm_network
 from swarmgen.ir.nodes import Model
 from swarmgen.ir.primitives import zero_of
 from swarmgen.ir.query import composition as swarm_composition
@@ -166,6 +167,7 @@ def package_files(
     for chart in charts:
         files[package / f"{modules[chart.name]}.py"] = render_member(chart, common)
     members = {c.member: modules[c.name] for c in charts if c.member}
+    network = swarm_network(model)
     init = render(
         f"{backend}/package_init.py.j2",
         **common,
@@ -175,7 +177,9 @@ def package_files(
         modules=sorted(modules.values()),
         member_modules="{" + ", ".join(f"{k!r}: {v}" for k, v in members.items()) + "}",
         composition=repr(swarm_composition(model)),
-        exports=repr(["COMPOSITION", "MEMBER_TYPES", *sorted(modules.values())]),
+        network=repr(network.values),
+        network_sources=one_line(", ".join(network.sources)) if network.sources else "none given",
+        exports=repr(["COMPOSITION", "MEMBER_TYPES", "NETWORK", *sorted(modules.values())]),
     )
     files[package / "__init__.py"] = format_python(init)
     main = render("common/main.py.j2", **common, package=str(package))

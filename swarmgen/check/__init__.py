@@ -12,6 +12,7 @@ from swarmgen.check.expressions import check_expressions
 from swarmgen.check.hardware import check_capabilities, check_parameters
 from swarmgen.check.livelock import check_livelocks
 from swarmgen.check.naming import check_collisions, check_output_paths
+from swarmgen.check.network import check_network
 from swarmgen.check.reachability import check_reachability
 from swarmgen.check.ros_interfaces import check_ros_interfaces
 from swarmgen.check.size import check_size
@@ -50,6 +51,7 @@ RULES: tuple[Rule, ...] = (
     check_counts,
     check_ros_names,
     check_types,
+    check_network,
 )
 
 

@@ -13,6 +13,7 @@ from swarmgen.diagnostics import (
     codes,
     codes_checks,
     codes_modelio,
+    codes_network,
     codes_ros,
     codes_scxml,
     codes_verify,  # noqa: F401 (registers the verify codes; `verify` names them as `cv`)
@@ -21,6 +22,7 @@ from swarmgen.diagnostics.codes import *  # noqa: F403 (the codes are the public
 from swarmgen.diagnostics.codes import CODES, active_codes, register, retire
 from swarmgen.diagnostics.codes_checks import *  # noqa: F403
 from swarmgen.diagnostics.codes_modelio import *  # noqa: F403
+from swarmgen.diagnostics.codes_network import *  # noqa: F403
 from swarmgen.diagnostics.codes_ros import *  # noqa: F403
 from swarmgen.diagnostics.codes_scxml import *  # noqa: F403
 from swarmgen.diagnostics.model import (
@@ -77,3 +79,4 @@ __all__ += codes_checks.__all__
 __all__ += codes_ros.__all__
 __all__ += codes_scxml.__all__
 __all__ += codes_modelio.__all__
+__all__ += codes_network.__all__

@@ -92,6 +92,7 @@ def read_hardware(
         parameters=tuple(b.prop(a) for a in element.kids("ownedAttribute") if not is_part(a)),
         communication_type=app.tags.get("communicationType") or None,
         communication_params=app.tags.get("communicationParams") or None,
+        communication_span=app.span if app.name == "CommunicationInterface" else None,
         span=element.span,
     )
 

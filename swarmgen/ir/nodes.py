@@ -86,6 +86,7 @@ class HardwareComponent(Node):
     parameters: tuple[Property, ...]
     communication_type: str | None = None
     communication_params: str | None = None
+    communication_span: Span | None = None  # the stereotype application that gives them
     span: Span
 
 

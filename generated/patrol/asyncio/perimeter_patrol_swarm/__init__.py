@@ -15,10 +15,14 @@ from . import relay, scout
 MEMBER_TYPES: dict[str, ModuleType] = {"Scout": scout, "Relay": relay}
 # member type -> number of members in the swarm composition
 COMPOSITION: dict[str, int] = {"Scout": 3, "Relay": 1}
+# The swarm's network, from the model's communicationParams (none given): the defaults of
+# --group, --port and --ttl with --transport udp (the command line wins; docs/network.md).
+NETWORK: dict[str, str | int] = {}
 
 __all__ = [
     "COMPOSITION",
     "MEMBER_TYPES",
+    "NETWORK",
     "relay",
     "scout",
 ]

@@ -4,7 +4,7 @@ installed plug-ins (entry points of `behaviour_types.GROUP`) or a `--library`.""
 
 from __future__ import annotations
 
-from . import COMPOSITION, MEMBER_TYPES
+from . import COMPOSITION, MEMBER_TYPES, NETWORK
 from ._runtime.cli import main
 from .behaviour_types import PLUGINS
 from .behaviours import simulated_library
@@ -17,5 +17,6 @@ if __name__ == "__main__":
             simulated_library,
             prog="python -m perimeter_patrol_swarm",
             plugins=PLUGINS,
+            network=NETWORK,
         )
     )

@@ -17,5 +17,8 @@ from . import uav, ugv
 MEMBER_TYPES: dict[str, ModuleType] = {"UAV": uav, "UGV": ugv}
 # member type -> number of members in the swarm composition
 COMPOSITION: dict[str, int] = {"UAV": 4, "UGV": 2}
+# The swarm's network, from the model's communicationParams (WirelessInterface): the defaults of
+# --group, --port and --ttl with --transport udp (the command line wins; docs/network.md).
+NETWORK: dict[str, str | int] = {"port": 5670}
 
-__all__ = ["COMPOSITION", "MEMBER_TYPES", "uav", "ugv"]
+__all__ = ["COMPOSITION", "MEMBER_TYPES", "NETWORK", "uav", "ugv"]

@@ -46,14 +46,22 @@ class Options:
     announce_every: float = ANNOUNCE_EVERY
 
 
+class BadItem(ValueError):
+    """An item of a `communicationParams` text that is not `key=value` (`item`)."""
+
+    def __init__(self, item: str) -> None:
+        super().__init__(f"'{item}' is not key=value")
+        self.item = item
+
+
 def param_items(text: str) -> list[tuple[str, str]]:
     """A `communicationParams` text as (key, value) items: `key=value`, separated by spaces,
-    commas or semicolons. ValueError names an item that is not `key=value`."""
+    commas or semicolons. BadItem names an item that is not `key=value`."""
     items = []
     for item in text.replace(",", " ").replace(";", " ").split():
         key, separator, value = item.partition("=")
         if not separator or not key or not value:
-            raise ValueError(f"'{item}' is not key=value")
+            raise BadItem(item)
         items.append((key, value))
     return items
 
