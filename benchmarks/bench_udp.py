@@ -2,15 +2,15 @@
 second from one sender to N receiver processes, and the end-to-end latency of a swarm event
 from the sender to the last of the N receivers (p50/p99).
 
-    .venv/bin/python benchmarks/bench_udp.py [--members 2 8] [--events 20000] [--paced 500]
+    .venv/bin/python benchmarks/bench_udp.py [--members 2 8 32] [--events 20000] [--paced 500]
 
 Each receiver is its own process with the runtime's `Endpoint` (decoding, validation, the
 duplicate filter), as a member's `UdpBus` has it; the engine is not involved (bench_dispatch
 measures it). Latency: `--paced` events 2 ms apart, each stamped with the sender's
 `time.monotonic()` (one clock for every process of the host); an event's latency is when the
 last receiver decoded it. Throughput: `--events` sent back to back; each receiver reports how
-many it got and over how long, so loss (a full socket buffer) shows. Writes
-benchmarks/results/udp.json.
+many it got and over how long, so loss (a full socket buffer) shows; the sender's own rate is
+how fast it got the burst out. Writes benchmarks/results/udp.json.
 """
 
 from __future__ import annotations
@@ -83,8 +83,9 @@ async def receive(options: Options, name: str) -> dict[str, Any]:
     return {"latency": receiver.latency, "burst": len(receiver.burst), "span": span}
 
 
-async def send(options: Options, members: int, paced: int, events: int) -> None:
-    """The sender: wait for every receiver, the paced events, the burst, the end."""
+async def send(options: Options, members: int, paced: int, events: int) -> float:
+    """The sender: wait for every receiver, the paced events, the burst, the end; the seconds
+    the burst took to send."""
     sender = Endpoint(options, name="sender")
     await sender.open()
     try:
@@ -95,16 +96,19 @@ async def send(options: Options, members: int, paced: int, events: int) -> None:
             sender.send(_event(n, "paced"))
             await asyncio.sleep(0.002)
         await asyncio.sleep(0.2)
+        began = time.monotonic()
         for n in range(paced + 1, paced + events + 1):
             sender.send(_event(n, "burst"))
             if n % 64 == 0:
                 await asyncio.sleep(0)  # let the transport write out its buffer
+        sent = time.monotonic() - began
         await asyncio.sleep(0.5)
         for n in range(3):
             sender.send(_event(paced + events + 1 + n, END))
             await asyncio.sleep(0.05)
     finally:
         sender.close()
+    return sent
 
 
 def _event(n: int, name: str) -> dict[str, Any]:
@@ -129,8 +133,9 @@ def run(members: int, paced: int, events: int) -> dict[str, Any]:
         subprocess.Popen([*me, "--receiver", f"r{n}"], stdout=subprocess.PIPE, text=True)
         for n in range(members)
     ]
+    load = os.getloadavg()[0]  # the machine may be shared: what else ran then
     try:
-        asyncio.run(send(Options(group=group, port=port), members, paced, events))
+        sent = asyncio.run(send(Options(group=group, port=port), members, paced, events))
         results = [json.loads(p.communicate(timeout=TIMEOUT)[0]) for p in procs]
     finally:
         for proc in procs:
@@ -154,13 +159,15 @@ def run(members: int, paced: int, events: int) -> dict[str, Any]:
         "deliveries_per_s_total": round(sum(rates)),
         "burst_received_min": min(r["burst"] for r in results),
         "burst_sent": events,
+        "sender_events_per_s": round(events / sent) if sent > 0 else 0,
+        "load_average_1min_before": round(load, 2),
     }
 
 
 def main() -> None:
     """Measure each member count and write the results."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--members", type=int, nargs="+", default=[2, 8])
+    parser.add_argument("--members", type=int, nargs="+", default=[2, 8, 32])
     parser.add_argument("--events", type=int, default=20_000)
     parser.add_argument("--paced", type=int, default=500)
     parser.add_argument("--receiver", default=None, help=argparse.SUPPRESS)

@@ -232,6 +232,7 @@ class Endpoint(asyncio.DatagramProtocol):
         self.received = 0
         self.peers: dict[str, Peer] = {}
         self.on_peer: Callable[[Peer], None] | None = None
+        self.replaced: set[str] = set()  # incarnations a newer one of their member replaced
         self.clock: float | None = None  # Unix time the mission clock started (the station's)
         self.cut = 0  # datagrams a partition cut
         self._cutting = False  # the last datagram from another process was cut
@@ -318,7 +319,14 @@ class Endpoint(asyncio.DatagramProtocol):
         """A valid message from another process (what the subclass does with it)."""
 
     def _heard(self, message: Mapping[str, Any]) -> None:
-        sender = message["sender"]
+        sender, origin = message["sender"], message["origin"]
+        if origin in self.replaced:
+            return  # a late word of an incarnation a newer one of its member replaced
+        known = self.peers.get(sender)
+        if known is not None and known.origin != origin:
+            self.replaced.add(known.origin)
+            if len(self.replaced) > SEEN_LIMIT:  # bounded: forget an arbitrary old one
+                self.replaced.pop()
         peer = Peer(
             sender,
             message["member_type"],
