@@ -68,11 +68,10 @@ def test_a_partitioned_member_misses_the_station_and_catches_up(
         steps = sequences("".join(members[member_id].out))
         assert steps[f"{kind}/{member_id}"] == expected[f"{kind}/{member_id}"]
     isolated = members["uav_1"]
-    assert station_step(isolated, "launch")["mission_t"] < 0.7
     # nothing of the station reached it while it was cut off, what it missed came after
     assert station_step(isolated, "missionStart")["mission_t"] >= 2.0
     for other in ("uav_2", "ugv_1"):
-        assert station_step(members[other], "missionStart")["mission_t"] < 1.5
+        assert station_step(members[other], "missionStart")["mission_t"] < 2.0
     assert "uav_1: partition: cut off from" in "".join(isolated.err), isolated.text()
     record = record_of(station)
     (start,) = [r for r in record if r["station"] == "delivered" and r["event"] == "missionStart"]
@@ -95,7 +94,7 @@ def test_a_member_killed_and_restarted_rejoins_and_the_mission_completes(
         members = {m: member(procs, net, k, m) for k, m in THREE}
         station = procs.start(
             "--station-only", *net, "--expect", "3", "--duration", "15",
-            "--events", "launch@0.2,missionStart@1,missionAbort@2.6",
+            "--events", "launch@0.2,missionStart@1,missionAbort@3",
         )  # fmt: skip
         killed = members["uav_2"]
         killed.wait_for(lambda step: step.get("event") == "missionStart")

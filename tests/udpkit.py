@@ -33,19 +33,31 @@ RUN_TIMEOUT = 40  # seconds any process of a test may live
 Steps = dict[str, list[tuple[str | None, list[str]]]]
 
 
+# made once per test session, whichever module asks first (each is seconds of work)
+_made: dict[str, Any] = {}
+
+
 @pytest.fixture(scope="module")
 def package(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The SAR sample compiled with this tree's runtime: the directory holding the package."""
-    out = tmp_path_factory.mktemp("sar_udp")
-    compiled = pipeline.compile_model(SAR)
-    assert compiled.files, "the SAR sample has errors"
-    pipeline.write_tree(compiled.files, out)
-    return out / "asyncio"
+    if "package" not in _made:
+        out = tmp_path_factory.mktemp("sar_udp")
+        compiled = pipeline.compile_model(SAR)
+        assert compiled.files, "the SAR sample has errors"
+        pipeline.write_tree(compiled.files, out)
+        _made["package"] = out / "asyncio"
+    return Path(_made["package"])
 
 
 @pytest.fixture(scope="module")
 def expected(package: Path) -> Steps:
-    """The reference: the whole swarm in one process on the in-memory bus (once per module)."""
+    """The reference: the whole swarm in one process on the in-memory bus (once a session)."""
+    if "expected" not in _made:
+        _made["expected"] = _in_process(package)
+    return dict(_made["expected"])
+
+
+def _in_process(package: Path) -> Steps:
     command = python("--swarm", "--events", EVENTS, "--time-scale", SCALE)
     run = subprocess.run(
         [*command, "--duration", "8"],
