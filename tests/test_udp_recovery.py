@@ -4,10 +4,18 @@ sockets on loopback, a group and port per test; every process killed at the end.
 
 from __future__ import annotations
 
+import asyncio
+import io
 import signal
+import socket
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from swarmgen.runtime.netoptions import Options
+from swarmgen.runtime.station import Station
+from swarmgen.runtime.transport import decode, encode, multicast_socket
 from tests.udpkit import (
     SCALE,
     Procs,
@@ -153,3 +161,86 @@ def test_a_restarted_station_finds_the_members_and_aborts_the_mission(
     (abort,) = [r for r in record if r["station"] == "delivered"]
     assert abort["event"] == "missionAbort" and sorted(abort["members"]) == ["uav_1", "ugv_1"]
     assert final_states(record) == {m: EVERY_FINAL[m] for _, m in pair}
+
+
+GAP = 0.3  # seconds between the two events of the script below
+
+
+async def _next_event(sock: socket.socket, station: Station) -> dict[str, Any]:
+    """The next station event on the group (the test's own messages skipped), the station
+    pumped meanwhile as its mission loop does; bounded: 5 s."""
+    loop = asyncio.get_running_loop()
+    receiving = asyncio.ensure_future(loop.sock_recv(sock, 65_535))
+    for _ in range(500):
+        station.pump()
+        done, _ = await asyncio.wait({receiving}, timeout=0.01)
+        if done:
+            message = decode(receiving.result())
+            if message["kind"] == "event":
+                return message
+            receiving = asyncio.ensure_future(loop.sock_recv(sock, 65_535))
+    receiving.cancel()
+    raise AssertionError("no station event in 5 s")
+
+
+async def _spacing(options: Options) -> tuple[list[dict[str, Any]], Station]:
+    """A station and two members played by a socket on the group: `a` from the start, `c`
+    heard after `launch` went out; the station's copies of `launch` and `missionStart`."""
+    station = Station(options, io.StringIO(), repeat=5.0, peer_timeout=5.0)
+    await station.open()
+    sock = multicast_socket(options)
+
+    def say(kind: str, sender: str, origin: str, **fields: Any) -> None:
+        message = {"kind": kind, "sender": sender, "origin": origin, **fields}
+        sock.sendto(encode(message), (options.group, options.port))
+
+    def member(sender: str) -> None:
+        say("announce", sender, sender, member_type="UAV", active=["Idle"], finished=False)
+
+    async def until(done: Callable[[], bool]) -> None:
+        for _ in range(500):  # bounded: 5 s
+            if done():
+                return
+            station.pump()
+            await station.wait(time.monotonic() + 0.01)
+        raise AssertionError("the station did not get there in 5 s")
+
+    try:
+        member("a")
+        await until(lambda: "a" in station.peers)
+        station.start_clock()
+        station.release("launch", None, 0.0)
+        copies = [await _next_event(sock, station)]
+        say("ack", "a", "a", of=station.origin, id=1)
+        await until(lambda: station.followers["a"].taken == 1)
+        await asyncio.sleep(GAP / 2)
+        member("c")  # heard late: launch is sent to it now
+        copies.append(await _next_event(sock, station))
+        say("ack", "c", "c", of=station.origin, id=1)
+        await until(lambda: station.followers["c"].taken == 1)
+        station.release("missionStart", None, GAP)  # due at GAP for a, later for c
+        copies.append(await _next_event(sock, station))
+        say("ack", "a", "a", of=station.origin, id=2)
+        await until(lambda: station.followers["a"].taken == 2)
+        copies.append(await _next_event(sock, station))
+        return copies, station
+    finally:
+        sock.close()
+        station.close()
+
+
+def test_the_station_spaces_a_late_member_and_addresses_only_then() -> None:
+    """In one process with real sockets on this test's group: a copy due for every member
+    whose next event it is goes without `to`; when a member heard late must wait to keep the
+    script's spacing, the copy for the others names them, and the late member's copy comes no
+    sooner after its previous one than the script spaces the two."""
+    net = network()
+    copies, station = asyncio.run(_spacing(Options(group=net[3], port=int(net[5]))))
+    assert [(c["name"], c["id"]) for c in copies] == [
+        ("launch", 1), ("launch", 1), ("missionStart", 2), ("missionStart", 2),
+    ]  # fmt: skip
+    assert [c.get("to") for c in copies] == [None, None, ["a"], None]
+    assert {c["origin"] for c in copies} == {station.origin}
+    assert {c["clock"] for c in copies} == {station.clock}
+    late = station.followers["c"]
+    assert late.sent_at is not None and late.sent_at - late.last_sent_at >= GAP - 0.001

@@ -29,6 +29,10 @@ from .faults import Faults
 from .netoptions import PEER_TIMEOUT, REPEAT_EVERY, Options
 from .transport import Endpoint, Peer
 
+# member ids in one copy's `to`: 16 of the longest ids (200 characters, JSON-escaped) fit a
+# datagram with room to spare
+TO_PER_COPY = 16
+
 
 @dataclass(slots=True)
 class Logged:
@@ -160,16 +164,20 @@ class Station(Endpoint):
         now, live = self.now(), self.live()
         wake = now + self.repeat
         due: dict[int, set[str]] = {}
+        waiting: dict[int, set[str]] = {}  # live members whose next event it is, due or not
         for follower in self.followers.values():
             if follower.member_id not in live or follower.taken >= len(self.log):
                 continue
+            waiting.setdefault(follower.taken, set()).add(follower.member_id)
             at = self.due_at(follower)
             if at <= now:
                 due.setdefault(follower.taken, set()).add(follower.member_id)
             else:
                 wake = min(wake, at)
         for index, members in sorted(due.items()):
-            self._copy(self.log[index], frozenset(members), now)
+            # addressed only when some member whose next event it is must wait (its spacing)
+            everyone = members == waiting[index]
+            self._copy(self.log[index], frozenset(members), now, everyone)
         for entry in self.log:
             lacking = {f.member_id for f in self.followers.values() if f.taken < entry.id}
             if not entry.delivered and not lacking & live:
@@ -177,7 +185,7 @@ class Station(Endpoint):
                 self.write("delivered", event=entry.name, id=entry.id, members=entry.acked)
         return wake
 
-    def _copy(self, entry: Logged, to: frozenset[str], now: float) -> None:
+    def _copy(self, entry: Logged, to: frozenset[str], now: float, everyone: bool) -> None:
         if not to - entry.last_to and now - entry.last_copy < self.repeat:
             return  # those members have a copy on its way
         for member_id in to:
@@ -190,11 +198,15 @@ class Station(Endpoint):
             self.write("resent", event=entry.name, id=entry.id, to=new)
         entry.addressed |= origins.keys()
         entry.last_copy, entry.last_to = now, to
-        self.send(
-            {"kind": "event", "id": entry.id, "name": entry.name, "sender": "station",
-             "timestamp": time.time(), "data": dict(entry.data) if entry.data else None,
-             "to": sorted(to), "clock": self.clock}
-        )  # fmt: skip
+        message = {"kind": "event", "id": entry.id, "name": entry.name, "sender": "station",
+                   "timestamp": time.time(), "data": dict(entry.data) if entry.data else None,
+                   "clock": self.clock}  # fmt: skip
+        if everyone:
+            self.send(message)
+            return
+        ids = sorted(to)
+        for start in range(0, len(ids), TO_PER_COPY):  # a datagram holds so many ids
+            self.send({**message, "to": ids[start : start + TO_PER_COPY]})
 
     async def wait(self, until: float) -> bool:
         """Wait for an ack or an announcement, until the monotonic time `until` (False: none
