@@ -119,6 +119,7 @@ class ModelKit:
             str, tuple[Machine | None, dict[str, tuple[str, int]], dict[str, tuple[str, object]]]
         ] = {}
         self.swarms: dict[str, list[tuple[str, str, int]]] = {}  # swarm -> (part, type, count)
+        self.properties: dict[str, list[tuple[str, str]]] = {}  # swarm -> (name, text)
         self.datatypes = {"Pose": {"x": "Real", "y": "Real"}}
         self.enumerations: dict[str, list[str]] = {}  # name -> literals
 
@@ -173,6 +174,11 @@ class ModelKit:
     ) -> None:
         normal = {k: (v if isinstance(v, tuple) else (v, 1)) for k, v in (parts or {}).items()}
         self.members[name] = (machine, normal, dict(data or {}))
+
+    def property(self, swarm: str, name: str, text: str) -> None:
+        """A user property of a swarm class: a Constraint it owns, stereotyped «Property»,
+        whose specification is an OpaqueExpression with the property's text."""
+        self.properties.setdefault(swarm, []).append((name, text))
 
     def swarm(self, name: str, members: dict[str, int] | list[tuple[str, str, int]]) -> None:
         """A Swarm class: {member type: count} (one part per type, named `<type>s`), or
@@ -249,6 +255,16 @@ class ModelKit:
                 )
                 body += _multiplicity(ids, count, "        ")
                 body.append("      </ownedAttribute>")
+            for prop_name, text in self.properties.get(swarm, []):
+                rule = ids.new()
+                body.append(
+                    f'      <ownedRule xmi:id="{rule}" name={quoteattr(prop_name)}>'
+                    f'<specification xmi:type="uml:OpaqueExpression" xmi:id="{ids.new()}">'
+                    f"<body>{escape(text)}</body></specification></ownedRule>"
+                )
+                stereos.append(
+                    f'  <CPSwarm:Property xmi:id="{ids.new()}" base_Constraint="{rule}"/>'
+                )
             body.append("    </packagedElement>")
             stereos.append(
                 f'  <CPSwarm:Swarm xmi:id="{ids.new()}" base_Class="{ids["class:" + swarm]}"/>'

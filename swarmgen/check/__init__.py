@@ -27,6 +27,7 @@ from swarmgen.check.types import check_types
 from swarmgen.check.wellformed import check_wellformed
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model
+from swarmgen.props.check import check_properties
 from swarmgen.ros.idl_index import InterfaceIndex
 
 Rule = Callable[[Model], list[Diagnostic]]
@@ -52,6 +53,7 @@ RULES: tuple[Rule, ...] = (
     check_ros_names,
     check_types,
     check_network,
+    check_properties,
 )
 
 

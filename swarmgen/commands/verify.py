@@ -29,6 +29,17 @@ if TYPE_CHECKING:
 @click.option("--max-depth", type=click.IntRange(1), default=10_000, show_default=True)
 @click.option("--no-symmetry", is_flag=True, help="Do not merge states that differ only in "
               "which members of one type are where.")  # fmt: skip
+@click.option("--no-por", is_flag=True, help="No partial-order reduction (every interleaving of "
+              "independent members).")  # fmt: skip
+@click.option(
+    "--property", "properties", multiple=True, metavar="TEXT",
+    help="A property to check besides the model's (repeatable): `always P`, `never P`, "
+    "`eventually P`, `P leads to Q`, `P until Q` (docs/verify.md).",
+)  # fmt: skip
+@click.option(
+    "--station-sends", "station_bound", type=click.IntRange(1, 100), default=1,
+    show_default=True, help="Times the station may send each of its events.",
+)  # fmt: skip
 @click.option(
     "--emits", "emit_bound", type=click.IntRange(0, 100), default=1, show_default=True,
     help="Events of its `emits` tag a behaviour may send per activation.",
@@ -47,6 +58,9 @@ def verify(
     max_states: int,
     max_depth: int,
     no_symmetry: bool,
+    no_por: bool,
+    properties: tuple[str, ...],
+    station_bound: int,
     emit_bound: int,
     directory: Path | None,
     quiet: bool,
@@ -58,9 +72,12 @@ def verify(
     from swarmgen.verify.load import parse_members
 
     counts = parse_members(members)
-    budget = Budget(max_states, max_depth, not no_symmetry)
+    budget = Budget(max_states, max_depth, not no_symmetry, not no_por)
     progress = None if quiet else (lambda line: click.echo(line, err=True))
-    result = run.verify(model, budget, counts, aborts, emit_bound, progress)
+    result = run.verify(
+        model, budget, counts, aborts, emit_bound, progress,
+        station_bound=station_bound, properties=properties,
+    )  # fmt: skip
     if fmt == "json":
         click.echo(_json(result), nl=False)
     else:

@@ -7,7 +7,7 @@ Registered after `codes_modelio`, in the same `CODES`, the same way. The violati
 
 from __future__ import annotations
 
-from swarmgen.diagnostics.codes import NOTE, M, register
+from swarmgen.diagnostics.codes import NOTE, WARNING, M, register
 
 VERIFY_DEADLOCK = register(
     "SG401",
@@ -59,4 +59,34 @@ VERIFY_BOUNDED = register(
     message="bounded: {states:,} states, depth {depth}: the budget (--max-states {max_states:,}, "
     "--max-depth {max_depth:,}) stopped the search before every configuration was explored",
     hint="raise --max-states or --max-depth, or verify fewer members (--members)",
+)
+VERIFY_LOST = register(
+    "SG406",
+    "event-lost",
+    "a swarm event that, under some interleaving, reaches every member in a state that does not "
+    "take it: no member receives it (a warning: a broadcast only some states care about is "
+    "often meant to be dropped; what the loss leads to is what the other properties judge)",
+    WARNING,
+    message="'{event}' sent by {sender} can be lost: every member it reaches ignores it "
+    "(shortest trace: {length} step(s))",
+    hint="the receivers are elsewhere when it arrives under this interleaving: wait for it in "
+    "the state it arrives in, or make the sender wait for the receiver",
+)
+VERIFY_PROPERTY = register(
+    "SG407",
+    "property-violated",
+    "a user property (`always`, `never`, `eventually`, `leads to`, `until`) is violated in the "
+    "composed swarm",
+    message="property '{name}' is violated: {text} ({how}; shortest trace: {length} step(s))",
+    hint="the trace below leads to it{fairness}",
+)
+VERIFY_PROPERTY_INVALID = register(
+    "SG408",
+    "property-invalid",
+    "a user property that does not parse, or names a member type, state, datum or event the "
+    "model does not have",
+    message="property '{name}': {error}",
+    hint="a property is `always P`, `never P`, `eventually P`, `P leads to Q` or `P until Q` "
+    "over `TYPE in STATE`, `count(TYPE in STATE) <= n`, `TYPE.datum > v` and event names "
+    "(docs/verify.md)",
 )

@@ -10,6 +10,7 @@ from swarmgen.ir.build_context import (
     is_part,
     short,
 )
+from swarmgen.ir.build_transitions import constraint_text
 from swarmgen.ir.literals import (
     INTEGER_TEXT,
 )
@@ -21,6 +22,7 @@ from swarmgen.ir.nodes import (
     Part,
     Property,
     Swarm,
+    SwarmProperty,
 )
 from swarmgen.names import identifier
 
@@ -170,10 +172,18 @@ def read_swarm(b: Builder, element: RawElement, member_ids: set[str]) -> Swarm |
         target = b.ref(attribute, "type")
         if target is not None and target.id in member_ids:
             parts.append(_part(b, attribute, target))
+    properties = []
+    for number, rule in enumerate(element.kids("ownedRule"), start=1):
+        if b.stereotype(rule, {"Property"}) is not None:
+            name = rule.name or f"property {number}"
+            properties.append(
+                SwarmProperty(name=name, text=constraint_text(rule, ""), span=rule.span)
+            )
     return Swarm(
         id=element.id or element.span.path,
         name=element.name,
         ident=identifier(element.name),
         members=tuple(parts),
+        properties=tuple(properties),
         span=element.span,
     )

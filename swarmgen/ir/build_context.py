@@ -40,6 +40,7 @@ KNOWN_STEREOTYPES: dict[str, frozenset[str]] = {
     "BehaviorLibrary": frozenset(),
     "SwarmEvent": frozenset({"sender", "scope"}),
     "RosMessage": frozenset({"rosType"}),  # on a DataType: the ROS message it is (profile.md)
+    "Property": frozenset(),  # on a Constraint of a swarm class: a user property (verify.md)
     **{k: _BEHAVIOUR_TAGS for k in BEHAVIOUR_KINDS},
 }
 

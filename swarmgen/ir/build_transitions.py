@@ -107,7 +107,7 @@ def _guard(b: Builder, element: RawElement) -> tuple[expr.Expr | None, str | Non
         constraint = element.first("guard") or element.first("ownedRule")
     if constraint is None:
         return None, None
-    text = _constraint_text(constraint)
+    text = constraint_text(constraint)
     if not text.strip():
         return None, None
     try:
@@ -118,14 +118,16 @@ def _guard(b: Builder, element: RawElement) -> tuple[expr.Expr | None, str | Non
         return None, text
 
 
-def _constraint_text(constraint: RawElement) -> str:
+def constraint_text(constraint: RawElement, fallback: str | None = None) -> str:
+    """A Constraint's text: its specification's body (or value), else `fallback` (the
+    constraint's name when None)."""
     spec = constraint.first("specification")
     if spec is not None:
         if spec.uml_type == "OpaqueExpression":
             return bodies_of(spec)[1]
         if "value" in spec.attrs:
             return spec.attrs["value"]
-    return constraint.name
+    return constraint.name if fallback is None else fallback
 
 
 def _trigger(b: Builder, element: RawElement, behaviour: Behaviour | None) -> Trigger | None:

@@ -113,13 +113,23 @@ class MemberType(Node):
     span: Span
 
 
+class SwarmProperty(Node):
+    """A user property of the swarm (a UML Constraint owned by the swarm class, stereotyped
+    «Property»; docs/profile.md): its name, its text in the property language and where."""
+
+    name: str
+    text: str
+    span: Span
+
+
 class Swarm(Node):
-    """A swarm composition: which member types, how many of each."""
+    """A swarm composition: which member types, how many of each, and its properties."""
 
     id: str
     name: str
     ident: str
     members: tuple[Part, ...]
+    properties: tuple[SwarmProperty, ...] = ()
     span: Span
 
 

@@ -12,10 +12,12 @@ scenario reaches the member's configuration at the end of the trace.
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from swarmgen.verify.state import thaw
 from swarmgen.verify.system import Step, SwarmState, System, canonical
 
 MAX_SHOWN = 200  # timeline lines printed (the scenarios hold every step)
@@ -30,19 +32,34 @@ class Trace:
     final: SwarmState
     scenarios: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
     length: int = 0
+    loop: int | None = None  # a lasso: the steps from this one on repeat for ever
 
 
-def rerun(system: System, steps: list[Step], symmetry: bool) -> Trace:
-    """The path's steps again, on real members (see the module docstring)."""
+def rerun(
+    system: System, steps: list[Step], symmetry: bool, tail: Sequence[tuple[int, Step]] = ()
+) -> Trace:
+    """The path's steps again, on real members (see the module docstring); then the `tail`:
+    steps of single members, by their position in the state the path reached (`decouple`)."""
     state = system.initial()
-    trace = Trace([], state, {member_id: [] for member_id in system.ids}, len(steps))
-    for number, step in enumerate(steps, start=1):
-        if step.member >= 0 and symmetry:
+    trace = Trace([], state, {member_id: [] for member_id in system.ids}, len(steps) + len(tail))
+    order: list[int] = []
+    for number, step in enumerate([*steps, *(s for _, s in tail)], start=1):
+        if number == len(steps) + 1:  # the tail's positions: the order of the state reached
+            order = canonical(system, state)[1] if symmetry else list(range(len(state.members)))
+        if number > len(steps):
+            step = replace(step, member=order[tail[number - len(steps) - 1][0]])
+        elif step.member >= 0 and symmetry:
             step = replace(step, member=canonical(system, state)[1][step.member])
         state, effect = system.apply(state, step)
         if effect.replay is not None:
             trace.scenarios[system.ids[effect.member]].append(dict(effect.replay))
         trace.lines.append(f"{number:4d}  {_describe(system, step, state)}")
+        for index, message in effect.dropped:  # ignored at once (`reduce`): replayed alike
+            replayed = {"event": message.name}
+            if message.data is not None:
+                replayed["data"] = thaw(message.data)
+            trace.scenarios[system.ids[index]].append(replayed)
+            trace.lines.append(f"        {system.ids[index]} ignores {message.name}")
     trace.final = state
     return trace
 
@@ -51,7 +68,7 @@ def active_names(system: System, state: SwarmState, index: int) -> list[str]:
     """The model names of a member's active atomic states, in document order."""
     chart = system.kinds[system.types[index]].chart
     nodes = sorted(
-        (chart.nodes[i] for i in state.members[index].engine.config), key=lambda n: n.order
+        (chart.nodes[i] for i in system.engine(state, index).config), key=lambda n: n.order
     )
     return [chart.names.get(n.id, n.id) for n in nodes if n.is_atomic]
 
@@ -74,12 +91,16 @@ def _describe(system: System, step: Step, after: SwarmState) -> str:
 
 def timeline(system: System, trace: Trace) -> list[str]:
     """The trace's lines (clipped to MAX_SHOWN) and the final configuration of every member."""
-    shown = trace.lines[:MAX_SHOWN]
+    shown = list(trace.lines[:MAX_SHOWN])
+    if trace.loop is not None:  # before the line of the cycle's first step
+        first = str(trace.loop + 1)
+        at = next((i for i, line in enumerate(shown) if line[:4].strip() == first), len(shown))
+        shown.insert(at, "      --- from here on, the steps repeat for ever ---")
     if len(trace.lines) > MAX_SHOWN:
         shown.append(f"      ... {len(trace.lines) - MAX_SHOWN} more step(s) in the scenarios")
     shown.append("      then:")
     for index, member_id in enumerate(system.ids):
-        engine = trace.final.members[index].engine
+        engine = system.engine(trace.final, index)
         status = "final" if engine.finished else "running"
         names = ", ".join(active_names(system, trace.final, index))
         shown.append(f"        {member_id} ({status}): {names}")
@@ -91,7 +112,7 @@ def write_scenarios(system: System, trace: Trace, directory: Path, title: str) -
     directory.mkdir(parents=True, exist_ok=True)
     written = []
     for index, member_id in enumerate(system.ids):
-        active = trace.final.members[index].engine.config
+        active = system.engine(trace.final, index).config
         payload = {
             "member": system.kinds[system.types[index]].name,
             "description": f"swarmgen verify: {title}; {member_id} ends in {', '.join(active)}",

@@ -11,12 +11,17 @@ in here: an observer per property, and a reduced `System.steps`.
 
 from __future__ import annotations
 
-import hashlib
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
-from swarmgen.verify.system import Step, SwarmState, System, canonical
+from swarmgen.verify.ample import ample
+from swarmgen.verify.decouple import decoupled
+from swarmgen.verify.system import Effect, Step, SwarmState, System, canonical
+
+if TYPE_CHECKING:
+    from swarmgen.verify.observe import Observer
 
 DEFAULT_MAX_STATES = 200_000
 DEFAULT_MAX_DEPTH = 10_000
@@ -29,6 +34,8 @@ class Budget:
     max_states: int = DEFAULT_MAX_STATES
     max_depth: int = DEFAULT_MAX_DEPTH
     symmetry: bool = True
+    por: bool = True  # partial-order reduction (`ample`)
+    decouple: bool = True  # stop at decoupled states after the abort (`decouple`)
 
 
 @dataclass
@@ -40,6 +47,7 @@ class Search:
     step: list[Step | None] = field(default_factory=list)
     depth: list[int] = field(default_factory=list)
     expanded: int = 0
+    reduced: int = 0  # states expanded by an ample set only (`ample`)
     bounded: bool = False  # the budget stopped it: states were left unexplored
     # the first deadlock before the abort (False) and after it (True): BFS, the shortest
     deadlocks: dict[bool, int] = field(default_factory=dict)
@@ -50,6 +58,11 @@ class Search:
     sent: set[str] = field(default_factory=set)  # events members sent
     received: set[str] = field(default_factory=set)  # events that changed a receiver
     unexpanded: set[int] = field(default_factory=set)
+    # after the abort, states whose members no longer interact (`decouple`): their members
+    decoupled: dict[int, tuple[int, ...]] = field(default_factory=dict)
+    locals_read: set[int] = field(default_factory=set)  # member values whose graphs were read
+    lost: dict[str, tuple[int, Step]] = field(default_factory=dict)  # event -> first edge losing it
+    symmetry: bool = True  # states were merged up to symmetry (the budget's choice)
 
     @property
     def states(self) -> int:
@@ -73,24 +86,30 @@ class Search:
 
 
 def digest(state: SwarmState) -> bytes:
-    """The visited set's key: 128 bits of BLAKE2b over the state's bytes (deterministic)."""
-    return hashlib.blake2b(state.key(), digest_size=16).digest()
+    """The visited set's key: the state's bytes (a few integers: member values are interned)."""
+    return state.key()
 
 
 def explore(
-    system: System, budget: Budget, progress: Callable[[str], None] | None = None
+    system: System,
+    budget: Budget,
+    progress: Callable[[str], None] | None = None,
+    observer: Observer | None = None,
 ) -> Search:
-    """Every state reachable from the initial one, breadth first, within the budget."""
-    search = Search()
+    """Every state reachable from the initial one (up to the reductions), breadth first,
+    within the budget; `observer` sees every state and edge (user properties)."""
+    search = Search(symmetry=budget.symmetry)
     for kind in system.kinds:  # what starting the machine entered
         search.entered[kind.name] = set(kind.started)
-    seen = search.seen
     first = _key(system, system.initial(), budget)
-    seen[digest(first)] = 0
+    search.seen[digest(first)] = 0
+    if observer is not None:
+        observer.discovered(0, first)
     search.parent.append(-1)
     search.step.append(None)
     search.depth.append(0)
     frontier: deque[tuple[int, SwarmState]] = deque([(0, first)])
+    visible = observer.projection if observer is not None else None
     level = 0
     while frontier:
         number, state = frontier.popleft()
@@ -109,9 +128,24 @@ def explore(
                 search.bounded = True
                 search.unexpanded.add(number)
             continue
-        successors = _expand(system, search, seen, frontier, number, state, budget)
+        if state.aborted and budget.decouple and _decoupled(system, search, number, state):
+            continue
+        steps = system.steps(state)
+        reduced = ample(system, state, visible) if budget.por else None
+        old = search.states
+        taken = reduced or steps
+        successors = _expand(system, search, frontier, number, state, budget, taken, observer)
+        if reduced is not None and any(n < old for n, _ in successors):
+            # the cycle proviso: an ample successor already visited -> expand in full
+            rest = [s for s in steps if s not in reduced]
+            successors += _expand(system, search, frontier, number, state, budget, rest, observer)
+            taken, reduced = reduced + rest, None
+        search.expanded += 1
+        search.reduced += reduced is not None
+        if observer is not None:
+            observer.edges(number, steps, successors, taken)
         if state.aborted:
-            search.aborted[number] = successors
+            search.aborted[number] = [n for n, _ in successors]
     if progress is not None:
         progress(_line(search, 0, search.max_depth))
     return search
@@ -120,20 +154,23 @@ def explore(
 def _expand(
     system: System,
     search: Search,
-    seen: dict[bytes, int],
     frontier: deque[tuple[int, SwarmState]],
     number: int,
     state: SwarmState,
     budget: Budget,
-) -> list[int]:
-    """Discover the successors of one state; their numbers."""
-    search.expanded += 1
-    successors: list[int] = []
-    for step in system.steps(state):
+    steps: list[Step],
+    observer: Observer | None = None,
+) -> list[tuple[int, Effect]]:
+    """Discover the successors of one state by `steps`: their numbers and the effects."""
+    seen = search.seen
+    successors: list[tuple[int, Effect]] = []
+    for step in steps:
         after, effect = system.apply(state, step)
         if effect.changed and effect.source not in ("", "station"):
             search.received.add(effect.event)
         search.sent.update(effect.sent)
+        for name in effect.lost:
+            search.lost.setdefault(name, (number, step))
         if effect.entered:
             kind = system.kinds[system.types[effect.member]].name
             search.entered.setdefault(kind, set()).update(effect.entered)
@@ -147,15 +184,35 @@ def _expand(
             search.step.append(step)
             search.depth.append(search.depth[number] + 1)
             frontier.append((known, key))
-        successors.append(known)
+            if observer is not None:
+                observer.discovered(known, key)
+        successors.append((known, effect))
     return successors
+
+
+def _decoupled(system: System, search: Search, number: int, state: SwarmState) -> bool:
+    """Stop at a state whose members no longer interact (`decouple`): record what their own
+    graphs enter and receive."""
+    graphs = decoupled(system, state.members)
+    if graphs is None:
+        return False
+    search.decoupled[number] = state.members
+    for index, graph in enumerate(graphs):
+        value = state.members[index]
+        if value in search.locals_read:
+            continue
+        search.locals_read.add(value)
+        kind = system.kinds[system.types[index]].name
+        search.entered.setdefault(kind, set()).update(graph.entered)
+        search.received.update(graph.received)
+    return True
 
 
 def _observe(system: System, search: Search, number: int, state: SwarmState) -> None:
     """Record what the properties read of a state about to be expanded."""
-    for index, member in enumerate(state.members):
+    for index in range(len(state.members)):
         kind = system.kinds[system.types[index]].name
-        search.entered.setdefault(kind, set()).update(member.engine.config)
+        search.entered.setdefault(kind, set()).update(system.engine(state, index).config)
     if system.finished(state):
         search.finished.add(number)
         return

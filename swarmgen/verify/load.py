@@ -13,7 +13,8 @@ from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import FinalState, Model, State
 from swarmgen.ir.query import composition, walk
 from swarmgen.span import Span
-from swarmgen.verify.system import System, make_kind
+from swarmgen.verify.kinds import make_kind
+from swarmgen.verify.system import System
 
 DEFAULT_ABORT = "missionAbort"
 MAX_MEMBERS = 64  # members of one composition (each is a position of every state)
@@ -54,6 +55,8 @@ def load(
     abort: Sequence[str] = (),
     emit_bound: int = 1,
     interfaces: Sequence[Path] = (),
+    *,
+    station_bound: int = 1,
 ) -> Loaded:
     """Validate the model and compose its swarm; `members` overrides counts of the model's
     swarm, `abort` names the abort events (default: `missionAbort` when the model has it)."""
@@ -79,7 +82,7 @@ def load(
     used = {e for m in machines.members for e in m.scopes}
     station = [e.name for e in model.events if e.sender == "station" and e.name in used]
     aborts = _aborts(abort, station)
-    loaded.system = System(kinds, counts, station, aborts, emit_bound)
+    loaded.system = System(kinds, counts, station, aborts, emit_bound, station_bound)
     loaded.counts = counts
     return loaded
 

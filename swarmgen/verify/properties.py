@@ -22,9 +22,10 @@ from swarmgen.diagnostics import codes_verify as cv
 from swarmgen.ir.nodes import Model
 from swarmgen.span import Span
 from swarmgen.verify.counterexample import Trace, active_names, rerun
+from swarmgen.verify.decouple import local
 from swarmgen.verify.explore import Budget, Search
 from swarmgen.verify.load import event_span, state_span, swarm_span
-from swarmgen.verify.system import System
+from swarmgen.verify.system import Step, System, canonical
 
 
 @dataclass
@@ -40,6 +41,7 @@ def evaluate(model: Model, system: System, search: Search, budget: Budget) -> li
     """Every property's violations, then the bounded note when the budget stopped the search."""
     swarm = _composition(system)
     found = _deadlock(model, system, search, budget) + _abort(model, system, search, budget)
+    found += _lost(model, system, search, budget)
     if search.bounded:
         span = swarm_span(model)
         bounded = cv.VERIFY_BOUNDED.at(
@@ -59,7 +61,9 @@ def _composition(system: System) -> str:
 
 
 def _stuck(system: System, trace: Trace) -> list[int]:
-    return [i for i, m in enumerate(trace.final.members) if not m.engine.finished]
+    return [
+        i for i in range(len(trace.final.members)) if not system.engine(trace.final, i).finished
+    ]
 
 
 def _located(model: Model, system: System, trace: Trace, index: int) -> tuple[Span, str]:
@@ -74,9 +78,12 @@ def _deadlock(model: Model, system: System, search: Search, budget: Budget) -> l
     found = []
     for after_abort in (False, True):
         number = search.deadlocks.get(after_abort)
+        tail: list[tuple[int, Step]] = []
+        if number is None and after_abort:
+            number, tail = _decoupled_deadlock(system, search)
         if number is None:
             continue
-        trace = rerun(system, search.path(number), budget.symmetry)
+        trace = rerun(system, search.path(number), budget.symmetry, tail)
         stuck = _stuck(system, trace)
         members = ", ".join(
             f"{system.ids[i]} in {', '.join(active_names(system, trace.final, i))}" for i in stuck
@@ -93,28 +100,63 @@ def _deadlock(model: Model, system: System, search: Search, budget: Budget) -> l
     return found
 
 
+def _decoupled_deadlock(
+    system: System, search: Search
+) -> tuple[int | None, list[tuple[int, Step]]]:
+    """The first decoupled state from which the members can all stop, one not final, and
+    each member's own steps there (`decouple`)."""
+    for number, members in sorted(search.decoupled.items()):
+        graphs = [local(system, v) for v in members]
+        if any(not g.terminal for g in graphs):
+            continue  # some member can always move: no swarm deadlock from here
+        ends = [next((t for t in g.terminal if t not in g.finished), None) for g in graphs]
+        if all(e is None for e in ends):
+            continue
+        tail: list[tuple[int, Step]] = []
+        for index, (graph, end) in enumerate(zip(graphs, ends, strict=True)):
+            tail.extend(
+                (index, s) for s in graph.path(end if end is not None else graph.terminal[0])
+            )
+        return number, tail
+    return None, []
+
+
 def _abort(model: Model, system: System, search: Search, budget: Budget) -> list[Finding]:
     """The first state after the abort (BFS order: the shortest trace) from which no state
     with every member final is reachable, and in which the members are stuck if there is
     one (the trace then ends where they stay, rather than where their fate is sealed)."""
-    if not search.aborted:
+    if not search.aborted and not search.decoupled:
         return []
     reverse: dict[int, list[int]] = {}
     for source, targets in search.aborted.items():
         for target in targets:
             reverse.setdefault(target, []).append(source)
+    bad_locals: dict[int, tuple[int, int]] = {}  # decoupled state -> (member, stuck value)
+    for number, members in search.decoupled.items():
+        for index, value in enumerate(members):
+            stuck = local(system, value).stuck()
+            if stuck is not None:
+                bad_locals[number] = (index, stuck)
+                break
     good = set(search.finished) | search.unexpanded
+    good.update(n for n in search.decoupled if n not in bad_locals)
     queue = deque(good)
     while queue:
         for source in reverse.get(queue.popleft(), ()):
             if source not in good:
                 good.add(source)
                 queue.append(source)
-    bad = [n for n in search.aborted if n not in good]
+    bad = [n for n in (*search.aborted, *bad_locals) if n not in good]
     if not bad:
         return []
-    stuck = [n for n in bad if n in search.stuck]
-    trace = rerun(system, search.path(min(stuck or bad)), budget.symmetry)
+    stuck_states = [n for n in bad if n in search.stuck]
+    first = min(stuck_states or bad)
+    tail: list[tuple[int, Step]] = []
+    if first in bad_locals:
+        index, value = bad_locals[first]
+        graph = local(system, search.decoupled[first][index])
+        tail = [(index, s) for s in graph.path(value)]
+    trace = rerun(system, search.path(first), budget.symmetry, tail)
     index = _stuck(system, trace)[0]
     span, state = _located(model, system, trace, index)
     diagnostic = cv.VERIFY_ABORT.at(
@@ -122,6 +164,28 @@ def _abort(model: Model, system: System, search: Search, budget: Budget) -> list
         length=trace.length,
     )  # fmt: skip
     return [Finding(diagnostic, trace)]
+
+
+def _lost(model: Model, system: System, search: Search, budget: Budget) -> list[Finding]:
+    """Each event that some step sends while every member it reaches ignores it (SG406),
+    with the shortest trace to that step."""
+    found = []
+    for name, (number, step) in sorted(search.lost.items()):
+        trace = rerun(system, [*search.path(number), step], budget.symmetry)
+        sender = system.ids[_real_member(system, search, number, step)]
+        diagnostic = cv.VERIFY_LOST.at(
+            event_span(model, name), event=name, sender=sender, length=trace.length
+        )
+        found.append(Finding(diagnostic, trace))
+    return found
+
+
+def _real_member(system: System, search: Search, number: int, step: Step) -> int:
+    """The member a step of the search names (a canonical position), in the system's order."""
+    if not search.symmetry:
+        return step.member
+    before = rerun(system, search.path(number), True).final
+    return canonical(system, before)[1][step.member]
 
 
 def _unreachable(model: Model, system: System, search: Search, swarm: str) -> list[Finding]:

@@ -6,15 +6,17 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from swarmgen import diagnostics as dg
+from swarmgen.verify import userprops
 from swarmgen.verify.explore import Budget, Search, explore
 from swarmgen.verify.load import Loaded, load
+from swarmgen.verify.observe import Observer
 from swarmgen.verify.properties import Finding, evaluate
 
-VERIFIED, VIOLATED, BOUNDED = 0, 1, 4
+VERIFIED, VIOLATED, BAD_PROPERTY, BOUNDED = 0, 1, 2, 4
 
 
 @dataclass
@@ -42,16 +44,33 @@ def verify(
     abort: Sequence[str] = (),
     emit_bound: int = 1,
     progress: Callable[[str], None] | None = None,
+    *,
+    station_bound: int = 1,
+    properties: Sequence[str] = (),
 ) -> Result:
-    """Verify the model's swarm within the budget (see the module docstring)."""
-    loaded = load(path, members, abort, emit_bound)
+    """Verify the model's swarm within the budget (see the module docstring): the built-in
+    properties, the model's own properties and `properties` (texts, as `--property`)."""
+    loaded = load(path, members, abort, emit_bound, station_bound=station_bound)
     result = Result(loaded, budget)
     if loaded.system is None or loaded.model is None:
         result.exit_code = int(dg.exit_code_for(loaded.diagnostics)) or VIOLATED
         return result
+    props, errors = userprops.gather(loaded.model, properties)
+    if errors:
+        loaded.diagnostics.extend(errors)
+        result.exit_code = BAD_PROPERTY
+        return result
+    observer = None
+    if props:
+        observer = Observer(loaded.system, props, userprops.needs_graph(props))
+        if userprops.needs_whole_abort(props):
+            budget = replace(budget, decouple=False)
+            result.budget = budget
     started = time.perf_counter()
-    result.search = explore(loaded.system, budget, progress)
+    result.search = explore(loaded.system, budget, progress, observer)
     result.findings = evaluate(loaded.model, loaded.system, result.search, budget)
+    if observer is not None:
+        result.findings.extend(userprops.evaluate(loaded.system, result.search, observer, budget))
     result.seconds = time.perf_counter() - started
     if any(f.diagnostic.level is dg.Severity.ERROR for f in result.findings):
         result.exit_code = VIOLATED
@@ -63,6 +82,8 @@ def verify(
 def summary(result: Result) -> str:
     """The one verdict line: verified, violated or bounded, with the search's size."""
     search = result.search
+    if search is None and result.exit_code == BAD_PROPERTY:
+        return "not verified: a --property has errors"
     if search is None:
         return "not verified: the model has errors"
     size = f"{search.states:,} states, depth {search.max_depth}"

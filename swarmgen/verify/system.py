@@ -1,49 +1,36 @@
 """The swarm as a transition system over the members' engines (docs/verify.md).
 
-A state is every member's engine (`state.EngineState`) with its inbox of events in flight, and
-whether the station has sent the abort. A step is one nondeterministic choice:
+A state is every member's value (its engine, `state.EngineState`, with its inbox of events in
+flight), whether the station has sent the abort, and how many times it sent each of its events.
+Member values are interned: a swarm state holds one small integer per member, so hashing,
+symmetry and the visited set work on tuples of integers, and what a member's step does is
+computed once per member value (`Move`), whatever the other members do. A step is one
+nondeterministic choice:
 
-- `station`: the station sends one of its events to every member (only while no earlier copy
-  of it is still in flight, and never after the abort, so the space stays finite);
+- `station`: the station sends one of its events to every running member (each at most
+  `station_bound` times, never after the abort, so the space stays finite);
 - `deliver`: a member takes the first event of its inbox (one macrostep of its engine);
-- `outcome`: a running behaviour ends with one of its declared outcomes, its outputs given as
-  the zero of their types (the documented bound for behaviour outputs);
+- `outcome`: a running behaviour ends with one of its declared outcomes and outputs from the
+  finite domains `domains` computes;
 - `emit`: a running behaviour sends one of the events its `emits` tag names (at most
   `emit_bound` times per activation);
 - `timer`: a pending timer fires.
 
-After its input a member also processes the events it queued to itself (`raise e(f = ...)`),
-as the asyncio member and `swarmgen replay` do before their next input; the swarm events it
-sent then go to the end of the inboxes of every running member (the sender's too), `local`
-ones to the sender only. Each member runs on the engine of the generated code of its type.
+The swarm events a member sent go to the end of the inbox of every running member (the
+sender's too), `local` ones to the sender only. Every member value is kept in its normal form
+(`reduce`): ignored deliveries and inert behaviour ends are taken at once.
 """
 
 from __future__ import annotations
 
-import pickle
+from array import array
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
-from swarmgen.runtime.chart import Action, Chart, Context
-from swarmgen.runtime.engine import FINALIZE_PREFIX, Engine, Event
-from swarmgen.verify.state import (
-    EngineState,
-    Frozen,
-    VerifyHost,
-    capture,
-    check_engine,
-    freeze,
-    restore,
-    thaw,
-)
-
-Sent = list[tuple[str, Frozen, str]]  # (event, data, scope) a member sent
-# an input's result: the member after, what it sent, the input as a replay step, states entered
-Result = tuple[EngineState, Sent, dict[str, Any], frozenset[str]]
-MEMO_LIMIT = 500_000  # inputs remembered (`System.run_input`)
-MAX_OWN_EVENTS = 100_000  # events a member may queue to itself in one step (the engine's step
-# bound stops a loop through them long before; this only keeps a bug from spinning)
+from swarmgen.verify.kinds import MemberKind
+from swarmgen.verify.reduce import Reducer
+from swarmgen.verify.state import EngineState, Frozen
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,114 +49,66 @@ class MemberState:
     engine: EngineState
     inbox: tuple[Message, ...] = ()
 
-    def key(self) -> tuple[Any, ...]:
-        """What makes the member's value (see `EngineState.key`)."""
-        return (self.engine.key(), tuple((m.name, m.data, m.source) for m in self.inbox))
-
 
 @dataclass(frozen=True, slots=True)
 class SwarmState:
-    """Every member (in the system's member order, or canonical order under symmetry) and
-    whether the abort was sent."""
+    """Every member's interned value (in the system's member order, or canonical order under
+    symmetry), whether the abort was sent, and the station's sends per event."""
 
-    members: tuple[MemberState, ...]
+    members: tuple[int, ...]
     aborted: bool = False
+    station: tuple[int, ...] = ()
 
     def key(self) -> bytes:
-        """The state's value as bytes (the visited set hashes it)."""
-        members = tuple(m.key() for m in self.members)
-        return pickle.dumps((members, self.aborted), pickle.HIGHEST_PROTOCOL)
+        """The state's value as bytes (the visited set's key)."""
+        return array("l", (*self.members, -1, int(self.aborted), *self.station)).tobytes()
 
 
 @dataclass(frozen=True, slots=True)
 class Step:
-    """One step: its kind, the member (index in the state's order), the event or outcome and
-    the state whose behaviour or timer it is."""
+    """One step: its kind, the member (index in the state's order), the event or outcome, the
+    state whose behaviour or timer it is and, for an outcome, the outputs."""
 
     kind: str  # "station", "deliver", "outcome", "emit", "timer"
     member: int = -1
     event: str = ""
     state: str = ""
+    data: Frozen = None
 
 
 @dataclass(frozen=True, slots=True)
 class Effect:
     """What a step did: the member that took an input (-1: none), that input as a replay step,
-    and whether its engine changed (the event was received, not ignored)."""
+    the event and its source, whether the engine changed (the event was received, not
+    ignored), the events sent, the states entered and the ignored deliveries taken at once."""
 
     member: int = -1
-    replay: dict[str, Any] | None = None
+    replay: Mapping[str, Any] | None = None
     event: str = ""
     source: str = ""
     changed: bool = False
-    sent: tuple[str, ...] = ()  # names of the events the member sent
-    entered: frozenset[str] = frozenset()  # states it entered (some maybe left again)
+    sent: tuple[str, ...] = ()
+    entered: frozenset[str] = frozenset()
+    dropped: tuple[tuple[int, Message], ...] = ()  # (member index, message)
+    lost: tuple[str, ...] = ()  # events the member sent that every receiver dropped at once
 
 
-@dataclass
-class MemberKind:
-    """A member type: its chart (from the generated module), one engine and host that every
-    member of the type is restored into, its event scopes and its behaviours' `emits`."""
+@dataclass(frozen=True, slots=True)
+class Move:
+    """A member-local step's result, computed once per member value: the member's value after
+    (its own sends to itself appended, in normal form), what it posts to the others, and its
+    effect (member and dropped indices are filled in by `System.apply`)."""
 
-    name: str
-    chart: Chart
-    scopes: Mapping[str, str]
-    emits: Mapping[str, tuple[str, ...]]  # behaviour -> events it emits
-    engine: Engine
-    host: VerifyHost
-    initial: EngineState
-    entered: set[str]  # states entered since the last input (`watch_entries`)
-    started: frozenset[str] = frozenset()  # states starting the machine entered
-
-
-def make_kind(
-    name: str, chart: Chart, scopes: Mapping[str, str], emits: Mapping[str, tuple[str, ...]]
-) -> MemberKind:
-    """A member type's engine, started once: its initial state. The chart must be the
-    verifier's own (`watch_entries` changes it)."""
-    entered = watch_entries(chart)
-    host = VerifyHost()
-    engine = Engine(chart, host, name)
-    check_engine(engine)
-    engine.clock = lambda: 0.0  # timestamps mean nothing to the search; keep steps alike
-    engine.start()
-    own_events(engine, host)
-    initial = capture(engine, host)
-    return MemberKind(
-        name, chart, scopes, emits, engine, host, initial, entered, frozenset(entered)
-    )
-
-
-def watch_entries(chart: Chart) -> set[str]:
-    """Make every state's entry record its id in the returned set: a state entered and left
-    in one macrostep (a region's final state whose completion leaves the parallel state) is
-    never in a configuration between steps, yet is reached. Its entry actions run as before."""
-    entered: set[str] = set()
-    for node in chart.nodes.values():
-        node.onentry = _recording(node.id, node.onentry, entered)
-    return entered
-
-
-def _recording(node_id: str, original: Action | None, entered: set[str]) -> Action:
-    def entry(ctx: Context) -> None:
-        entered.add(node_id)
-        if original is not None:
-            original(ctx)
-
-    return entry
-
-
-def own_events(engine: Engine, host: VerifyHost) -> None:
-    """Process the events the member queued to itself, as its queue would before any input."""
-    for _ in range(MAX_OWN_EVENTS):
-        if not host.own or not engine.running:
-            break
-        engine.send(host.own.pop(0))
-    host.own.clear()
+    after: int
+    posts: tuple[Message, ...]  # swarm-scoped messages for every other running member
+    effect: Effect
+    dropped: tuple[Message, ...]
+    kept: frozenset[Message] = frozenset()  # sent messages the sender's own inbox kept
 
 
 class System:
-    """The composed swarm: member kinds, which kind each member is, the station's events."""
+    """The composed swarm: member kinds, which kind each member is, the station's events, and
+    the interned member values."""
 
     def __init__(
         self,
@@ -178,6 +117,7 @@ class System:
         station: Sequence[str],
         abort: Sequence[str],
         emit_bound: int = 1,
+        station_bound: int = 1,
     ) -> None:
         self.kinds = tuple(kinds)
         by_name = {k.name: i for i, k in enumerate(self.kinds)}
@@ -190,185 +130,241 @@ class System:
         self.station = tuple(station)
         self.abort = frozenset(abort)
         self.emit_bound = emit_bound
-        # Engines are deterministic: the same input to the same member value gives the same
-        # result, whatever the other members do, so each is computed once (bounded memo).
-        self._memo: dict[tuple[Any, ...], Result] = {}
+        self.station_bound = station_bound
+        self.values: list[MemberState] = []  # interned member values: id -> value
+        self.value_type: list[int] = []
+        self._ids: dict[tuple[int, MemberState], int] = {}
+        self._runs: dict[tuple[Any, ...], Any] = {}
+        self._moves: dict[tuple[Any, ...], Move] = {}
+        self._steps: dict[int, tuple[Step, ...]] = {}
+        self._appends: dict[tuple[int, Message], tuple[int, tuple[Message, ...]]] = {}
+        self.reducer = Reducer(self)
+        self.ample_memo: dict[int, bool] = {}  # member value -> its steps are persistent
+        self.local_memo: dict[int, Any] = {}  # member value -> its own graph (`decouple`)
+
+    # --- member values ------------------------------------------------------------------
+
+    def intern(self, kind: int, member: MemberState) -> int:
+        """The id of a member value of type `kind` (a new one the first time)."""
+        key = (kind, member)
+        known = self._ids.get(key)
+        if known is None:
+            known = self._ids[key] = len(self.values)
+            self.values.append(member)
+            self.value_type.append(kind)
+        return known
+
+    def member(self, state: SwarmState, index: int) -> MemberState:
+        """The value of the member at `index` of `state`."""
+        return self.values[state.members[index]]
+
+    def engine(self, state: SwarmState, index: int) -> EngineState:
+        """The engine of the member at `index` of `state`."""
+        return self.values[state.members[index]].engine
+
+    def _normal_id(self, kind: int, member: MemberState) -> tuple[int, tuple[Message, ...]]:
+        normal = self.reducer.normal(kind, member)
+        return self.intern(kind, normal.member), normal.dropped
+
+    def run_input(
+        self, kind: int, before: EngineState, step: str, name: str, data: Frozen, state_id: str
+    ) -> Any:
+        """One input to an engine of type `kind` (`MemberKind.run`), computed once."""
+        key = (kind, before, step, name, data, state_id)
+        known = self._runs.get(key)
+        if known is None:
+            known = self._runs[key] = self.kinds[kind].run(before, step, name, data, state_id)
+        return known
+
+    # --- the initial state and the steps --------------------------------------------------
 
     def initial(self) -> SwarmState:
-        """Every member started, nothing in flight."""
-        return SwarmState(tuple(MemberState(self.kinds[t].initial) for t in self.types))
+        """Every member started, nothing in flight (in normal form: `reduce`)."""
+        members = tuple(
+            self._normal_id(t, MemberState(self.kinds[t].initial))[0] for t in self.types
+        )
+        return SwarmState(members, False, (0,) * len(self.station))
 
     def steps(self, state: SwarmState) -> list[Step]:
         """Every step enabled in `state`, in a fixed order (member steps, then the station)."""
         found: list[Step] = []
-        for index, member in enumerate(state.members):
-            found.extend(self.member_steps(index, member))
-        if not state.aborted:
-            in_flight = {
-                m.name for mem in state.members for m in mem.inbox if m.source == "station"
-            }
-            found.extend(Step("station", event=e) for e in self.station if e not in in_flight)
+        for index, value in enumerate(state.members):
+            found.extend(
+                Step(s.kind, index, s.event, s.state, s.data) for s in self.local_steps(value)
+            )
+        found.extend(Step("station", event=e) for e in self.station_events(state))
         return found
 
-    def member_steps(self, index: int, member: MemberState) -> list[Step]:
-        """The steps of one member: its next delivery, its behaviours' ends and emissions,
-        its timers."""
+    def local_steps(self, value: int) -> tuple[Step, ...]:
+        """The steps of one member value (member -1): its next delivery, its behaviours'
+        ends and emissions, its timers."""
+        known = self._steps.get(value)
+        if known is None:
+            known = self._steps[value] = tuple(self._local_steps(value))
+        return known
+
+    def _local_steps(self, value: int) -> list[Step]:
+        member = self.values[value]
         engine = member.engine
         if not engine.running:
             return []
-        kind = self.kinds[self.types[index]]
-        found = [Step("deliver", index)] if member.inbox else []
+        kind = self.kinds[self.value_type[value]]
+        found = [Step("deliver")] if member.inbox else []
         for state_id, emitted in engine.calls:
             call = kind.chart.nodes[state_id].call
             if call is None:
                 continue
             found.extend(
-                Step("outcome", index, o, state_id) for o in call.outcomes or ("succeeded",)
+                Step("outcome", -1, o.name, state_id, o.outputs) for o in kind.endings[state_id]
             )
             if emitted < self.emit_bound:
                 found.extend(
-                    Step("emit", index, e, state_id) for e in kind.emits.get(call.behaviour, ())
+                    Step("emit", -1, e, state_id) for e in kind.emits.get(call.behaviour, ())
                 )
-        found.extend(Step("timer", index, event, state_id) for state_id, event in engine.timers)
+        found.extend(Step("timer", -1, event, state_id) for state_id, event in engine.timers)
         return found
+
+    def station_events(self, state: SwarmState) -> list[str]:
+        """The events the station may still send: none after the abort, each at most
+        `station_bound` times."""
+        if state.aborted:
+            return []
+        return [
+            e for e, n in zip(self.station, state.station, strict=True) if n < self.station_bound
+        ]
 
     def quiescent(self, state: SwarmState) -> bool:
         """No member can move without the station."""
-        return not any(self.member_steps(i, m) for i, m in enumerate(state.members))
+        return not any(self.local_steps(v) for v in state.members)
 
     def finished(self, state: SwarmState) -> bool:
         """Every member reached a top-level final state."""
-        return all(m.engine.finished for m in state.members)
+        return all(self.values[v].engine.finished for v in state.members)
 
     def station_moves(self, state: SwarmState) -> bool:
-        """Whether some station event would change some running member (the station can
-        still get the swarm going); false after the abort."""
-        if state.aborted:
-            return False
-        for index, member in enumerate(state.members):
-            if not member.engine.running:
+        """Whether some station event the station may still send would change some running
+        member (the station can still get the swarm going)."""
+        events = self.station_events(state)
+        for value in state.members:
+            engine = self.values[value].engine
+            if not engine.running:
                 continue
-            for name in self.station:
-                after = self.run_input(index, member.engine, "deliver", name, None, "")[0]
-                if after != member.engine:
+            kind = self.value_type[value]
+            for name in events:
+                ran = self.run_input(kind, engine, "deliver", name, None, "")
+                if ran.sent or ran.after != engine:
                     return True
         return False
+
+    # --- applying a step ------------------------------------------------------------------
 
     def apply(self, state: SwarmState, step: Step) -> tuple[SwarmState, Effect]:
         """The state after `step`, and what it did."""
         if step.kind == "station":
-            message = Message(step.event, None, "station")
-            told = tuple(
-                replace(m, inbox=(*m.inbox, message)) if m.engine.running else m
-                for m in state.members
-            )
-            return SwarmState(told, state.aborted or step.event in self.abort), Effect()
+            return self._station(state, step)
         index = step.member
-        member = state.members[index]
+        move = self.move(state.members[index], step)
+        members = list(state.members)
+        members[index] = move.after
+        dropped = [(index, m) for m in move.dropped]
+        lost: list[str] = []
+        for message in move.posts:
+            kept = message in move.kept
+            for target, value in enumerate(members):
+                if target != index and self.values[value].engine.running:
+                    members[target], gone = self.append(value, message)
+                    dropped.extend((target, m) for m in gone)
+                    inbox = self.values[members[target]].inbox
+                    kept = kept or (bool(inbox) and inbox[-1] == message)
+            if not kept:
+                lost.append(message.name)
+        e = move.effect
+        member = index if e.replay is not None else -1
+        effect = Effect(
+            member, e.replay, e.event, e.source, e.changed, e.sent, e.entered, tuple(dropped),
+            tuple(lost),
+        )  # fmt: skip
+        return SwarmState(tuple(members), state.aborted, state.station), effect
+
+    def _station(self, state: SwarmState, step: Step) -> tuple[SwarmState, Effect]:
+        message = Message(step.event, None, "station")
+        members = list(state.members)
+        dropped: list[tuple[int, Message]] = []
+        for target, value in enumerate(members):
+            if self.values[value].engine.running:
+                members[target], lost = self.append(value, message)
+                dropped.extend((target, m) for m in lost)
+        counts = tuple(
+            n + (e == step.event) for e, n in zip(self.station, state.station, strict=True)
+        )
+        aborted = state.aborted or step.event in self.abort
+        effect = Effect(event=step.event, source="station", dropped=tuple(dropped))
+        return SwarmState(tuple(members), aborted, counts), effect
+
+    def append(self, value: int, message: Message) -> tuple[int, tuple[Message, ...]]:
+        """A member value with `message` at the end of its inbox, in normal form, and the
+        messages that dropped."""
+        key = (value, message)
+        known = self._appends.get(key)
+        if known is None:
+            member = self.values[value]
+            grown = MemberState(member.engine, (*member.inbox, message))
+            known = self._appends[key] = self._normal_id(self.value_type[value], grown)
+        return known
+
+    def move(self, value: int, step: Step) -> Move:
+        """What a member-local step does to a member value (computed once; the step's member
+        is not read)."""
+        key = (value, step.kind, step.event, step.state, step.data)
+        known = self._moves.get(key)
+        if known is None:
+            known = self._moves[key] = self._move(value, step)
+        return known
+
+    def _move(self, value: int, step: Step) -> Move:
+        member, kind = self.values[value], self.value_type[value]
         inbox = member.inbox
-        sent: Sent
         if step.kind == "emit":
-            scope = self.kinds[self.types[index]].scopes.get(step.event, "swarm")
-            after, sent = self._emitted(member.engine, step), [(step.event, None, scope)]
+            calls = tuple((s, n + 1 if s == step.state else n) for s, n in member.engine.calls)
+            after = replace(member.engine, calls=calls)
+            scope = self.kinds[kind].scopes.get(step.event, "swarm")
+            sent: tuple[tuple[str, Frozen, str], ...] = ((step.event, None, scope),)
             effect = Effect(sent=(step.event,))
         else:
-            name, data, source = step.event, None, ""
+            name, data, source = step.event, step.data, ""
             if step.kind == "deliver":
                 head, inbox = inbox[0], inbox[1:]
                 name, data, source = head.name, head.data, head.source
-            after, sent, replayed, entered = self.run_input(
-                index, member.engine, step.kind, name, data, step.state
-            )
+            ran = self.run_input(kind, member.engine, step.kind, name, data, step.state)
+            after, sent = ran.after, ran.sent
+            changed = ran.after != member.engine or bool(ran.sent)
             names = tuple(n for n, _, _ in sent)
-            effect = Effect(index, replayed, name, source, after != member.engine, names, entered)
-        members = list(state.members)
-        members[index] = MemberState(after, inbox)
-        self._post(members, index, sent)
-        return SwarmState(tuple(members), state.aborted), effect
-
-    def _post(self, members: list[MemberState], index: int, sent: Sent) -> None:
-        """What member `index` sent, to the end of the inboxes of its running receivers."""
-        kind_name = self.kinds[self.types[index]].name
-        for name, data, scope in sent:
-            message = Message(name, data, kind_name)
-            targets = [index] if scope == "local" else range(len(members))
-            for target in targets:
-                receiver = members[target]
-                if receiver.engine.running:
-                    members[target] = MemberState(receiver.engine, (*receiver.inbox, message))
-
-    def _emitted(self, engine: EngineState, step: Step) -> EngineState:
-        calls = tuple((s, n + 1 if s == step.state else n) for s, n in engine.calls)
-        return replace(engine, calls=calls)
-
-    def run_input(
-        self, index: int, before: EngineState, kind: str, name: str, data: Frozen, state_id: str
-    ) -> Result:
-        """One input to a member's engine: its state after, what it sent (name, data, scope)
-        and the input as a `swarmgen replay` step."""
-        memo_key = (self.types[index], before.key(), kind, name, data, state_id)
-        known = self._memo.get(memo_key)
-        if known is not None:
-            return known
-        if len(self._memo) >= MEMO_LIMIT:
-            self._memo.clear()
-        result = self._run_input(index, before, kind, name, data, state_id)
-        self._memo[memo_key] = result
-        return result
-
-    def _run_input(
-        self, index: int, before: EngineState, kind: str, name: str, data: Frozen, state_id: str
-    ) -> Result:
-        member_kind = self.kinds[self.types[index]]
-        engine, host = member_kind.engine, member_kind.host
-        restore(engine, host, before)
-        replayed: dict[str, Any]
-        if kind == "outcome":
-            node = member_kind.chart.nodes[state_id]
-            behaviour = node.call.behaviour if node.call is not None else ""
-            host.calls.pop(state_id, None)  # the behaviour ended
-            origin = (state_id, engine.activation(state_id))
-            event = engine.make_event(
-                f"{FINALIZE_PREFIX}{state_id}.{name}", {}, "verify", origin=origin
-            )
-            replayed = {"complete": behaviour, "outcome": name, "outputs": {}, "state": state_id}
-        else:
-            if kind == "timer":
-                host.cancel_timer(member_kind.chart.nodes[state_id], name)  # it fired
-            value = thaw(data)
-            event = Event(name, value, 0, 0.0, "verify")
-            replayed = {"event": name} if value is None else {"event": name, "data": value}
-        member_kind.entered.clear()
-        engine.send(event)
-        own_events(engine, host)
-        sent = [
-            (
-                e.name,
-                freeze(e.data) if e.data is not None else None,
-                member_kind.scopes.get(e.name, "swarm"),
-            )
-            for e in host.sent
-        ]
-        return capture(engine, host), sent, replayed, frozenset(member_kind.entered)
+            effect = Effect(-1, ran.replay, name, source, changed, names, ran.entered)
+        source_type = self.kinds[kind].name
+        messages = [Message(n, d, source_type) for n, d, _ in sent]
+        own = tuple(messages) if after.running else ()
+        after_id, dropped = self._normal_id(kind, MemberState(after, (*inbox, *own)))
+        posts = tuple(
+            m for m, (_, _, scope) in zip(messages, sent, strict=True) if scope != "local"
+        )
+        left = self.values[after_id].inbox
+        kept = frozenset(m for m in own if m in left[len(left) - len(own) :])
+        return Move(after_id, posts, effect, dropped, kept)
 
 
 def canonical(system: System, state: SwarmState) -> tuple[SwarmState, list[int]]:
-    """Symmetry: the members of each type sorted by their value, and the permutation used
-    (position in the canonical state -> position in `state`)."""
+    """Symmetry: the members of each type sorted by their interned value, and the permutation
+    used (position in the canonical state -> position in `state`)."""
+    members = state.members
     order: list[int] = []
     start = 0
-    members = state.members
     while start < len(members):
         end = start
-        while end < len(members) and system.types[end] == system.types[start]:
+        kind = system.types[start]
+        while end < len(members) and system.types[end] == kind:
             end += 1
-        group = sorted(range(start, end), key=lambda i: _sort_key(members[i]))
-        order.extend(group)
+        order.extend(sorted(range(start, end), key=members.__getitem__))
         start = end
     if order == list(range(len(members))):
         return state, order
-    return SwarmState(tuple(members[i] for i in order), state.aborted), order
-
-
-def _sort_key(member: MemberState) -> bytes:
-    return pickle.dumps(member.key(), pickle.HIGHEST_PROTOCOL)
+    return SwarmState(tuple(members[i] for i in order), state.aborted, state.station), order

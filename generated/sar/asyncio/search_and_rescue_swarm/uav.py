@@ -16,6 +16,7 @@ EVENT_SCOPES: dict[str, str] = {
     "missionStart": "swarm",
     "missionAbort": "swarm",
     "targetFound": "swarm",
+    "targetRescued": "swarm",
 }
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
@@ -29,7 +30,8 @@ EVENT_FIELDS: dict[str, dict[str, Any]] = {
                 "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
             },
         },
-    }
+    },
+    "targetRescued": {"target_id": 0},
 }
 
 
@@ -161,6 +163,7 @@ def build() -> Chart:
     b.transition("Tracking", ("outcome.Tracking.succeeded",), ("Coverage",))
     b.transition("Tracking", ("outcome.Tracking.targetLost",), ("LocalCoverage",))
     b.transition("Tracking", ("outcome.Tracking.aborted",), ("LocalCoverage",))
+    b.transition("Tracking", ("targetRescued",), ("Coverage",))
     b.node(
         "LocalCoverage",
         "state",
@@ -177,7 +180,9 @@ def build() -> Chart:
     b.transition("LocalCoverage", ("outcome.LocalCoverage.succeeded",), ("Tracking",))
     b.transition("LocalCoverage", ("outcome.LocalCoverage.aborted",), ("Coverage",))
     b.node("SwarmFunctions", "state", "Mission", name="SwarmFunctions")
-    b.initial("SwarmFunctions", ("TargetMonitoring",))
+    b.initial("SwarmFunctions", ("Standby",))
+    b.node("Standby", "state", "SwarmFunctions", name="Standby")
+    b.transition("Standby", ("launch",), ("TargetMonitoring",))
     b.node(
         "TargetMonitoring",
         "state",
@@ -208,6 +213,7 @@ def build() -> Chart:
     )
     b.transition("Land", ("outcome.Land.succeeded",), ("Landed",))
     b.transition("Land", ("outcome.Land.aborted",), ("Land",))
+    b.transition("Land", ("outcome.Land.preempted",), ("Land",))
     b.node("Landed", "final", None, name="Landed")
     b.initial(None, ("Mission",))
     return b.build()

@@ -11,7 +11,12 @@ CHART_NAME = "UGV"
 MEMBER_TYPE = "UGV"
 MACHINE = "UgvRescue"
 # How each event this member sends is delivered: "swarm" (every member) or "local" (itself).
-EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "targetFound": "swarm"}
+EVENT_SCOPES: dict[str, str] = {
+    "launch": "swarm",
+    "missionAbort": "swarm",
+    "targetFound": "swarm",
+    "targetRescued": "swarm",
+}
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
@@ -24,7 +29,8 @@ EVENT_FIELDS: dict[str, dict[str, Any]] = {
                 "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
             },
         },
-    }
+    },
+    "targetRescued": {"target_id": 0},
 }
 
 
@@ -47,6 +53,11 @@ def _args_3(ctx: Context) -> dict[str, Any]:
 def _args_4(ctx: Context) -> dict[str, Any]:
     d = ctx.data
     return {"target_id": d["target_id"], "target_pose": d["target_pose"]}
+
+
+def _action_5(ctx: Context) -> None:
+    d = ctx.data
+    ctx.send("targetRescued", {"target_id": d["target_id"]})
 
 
 def build() -> Chart:
@@ -82,7 +93,8 @@ def build() -> Chart:
         ),
     )
     b.transition("Bidding", ("outcome.Bidding.succeeded",), ("MoveToTarget",))
-    b.transition("Bidding", ("outcome.Bidding.aborted",), ("Ready",))
+    b.transition("Bidding", ("outcome.Bidding.aborted",), ("Bidding",))
+    b.transition("Bidding", ("outcome.Bidding.preempted",), ("Bidding",))
     b.node(
         "MoveToTarget",
         "state",
@@ -91,7 +103,8 @@ def build() -> Chart:
         call=Call("MoveTo", "HardwareFunction", _args_3, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition("MoveToTarget", ("outcome.MoveToTarget.succeeded",), ("Rescuing",))
-    b.transition("MoveToTarget", ("outcome.MoveToTarget.aborted",), ("Ready",))
+    b.transition("MoveToTarget", ("outcome.MoveToTarget.aborted",), ("MoveToTarget",))
+    b.transition("MoveToTarget", ("outcome.MoveToTarget.preempted",), ("MoveToTarget",))
     b.node(
         "Rescuing",
         "state",
@@ -99,8 +112,9 @@ def build() -> Chart:
         name="Rescuing",
         call=Call("Rescue", "ComplexBehavior", _args_4, (), ("succeeded", "aborted", "preempted")),
     )
-    b.transition("Rescuing", ("outcome.Rescuing.succeeded",), ("Ready",))
-    b.transition("Rescuing", ("outcome.Rescuing.aborted",), ("Ready",))
+    b.transition("Rescuing", ("outcome.Rescuing.succeeded",), ("Ready",), action=_action_5)
+    b.transition("Rescuing", ("outcome.Rescuing.aborted",), ("Rescuing",))
+    b.transition("Rescuing", ("outcome.Rescuing.preempted",), ("Rescuing",))
     b.transition("Operating", ("missionAbort",), ("Stopped",))
     b.node("Stopped", "final", None, name="Stopped")
     b.initial(None, ("Operating",))

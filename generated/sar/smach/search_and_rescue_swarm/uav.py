@@ -23,6 +23,7 @@ EVENT_SCOPES: dict[str, str] = {
     "missionStart": "swarm",
     "missionAbort": "swarm",
     "targetFound": "swarm",
+    "targetRescued": "swarm",
 }
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
@@ -36,7 +37,8 @@ EVENT_FIELDS: dict[str, dict[str, Any]] = {
                 "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
             },
         },
-    }
+    },
+    "targetRescued": {"target_id": 0},
 }
 
 
@@ -69,7 +71,7 @@ def build_state_machine() -> smach.StateMachine:
             smach.BehaviourState(
                 "Land", "HardwareFunction", outcomes=["succeeded", "aborted", "preempted"]
             ),
-            transitions={"succeeded": "Landed", "aborted": "Land"},
+            transitions={"succeeded": "Landed", "aborted": "Land", "preempted": "Land"},
         )
         smach.StateMachine.add("Landed", smach.FinalState())
     return sm
@@ -147,6 +149,7 @@ def make_sar_behavior() -> smach.StateMachine:
                 "succeeded": "Coverage",
                 "targetLost": "LocalCoverage",
                 "aborted": "LocalCoverage",
+                "targetRescued": "Coverage",
             },
         )
         smach.StateMachine.add(
@@ -167,7 +170,10 @@ def make_swarm_functions() -> smach.StateMachine:
     # state SwarmFunctions
     sm = smach.StateMachine(outcomes=[])
     with sm:
-        sm.set_initial_state(["TargetMonitoring"])
+        sm.set_initial_state(["Standby"])
+        smach.StateMachine.add(
+            "Standby", smach.EventState(), transitions={"launch": "TargetMonitoring"}
+        )
         smach.StateMachine.add(
             "TargetMonitoring",
             smach.BehaviourState(

@@ -18,7 +18,12 @@ CHART_NAME = "UGV"
 MEMBER_TYPE = "UGV"
 MACHINE = "UgvRescue"
 # How each event this member sends is delivered: "swarm" (every member) or "local" (itself).
-EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "targetFound": "swarm"}
+EVENT_SCOPES: dict[str, str] = {
+    "launch": "swarm",
+    "missionAbort": "swarm",
+    "targetFound": "swarm",
+    "targetRescued": "swarm",
+}
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
@@ -31,7 +36,8 @@ EVENT_FIELDS: dict[str, dict[str, Any]] = {
                 "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
             },
         },
-    }
+    },
+    "targetRescued": {"target_id": 0},
 }
 
 
@@ -39,6 +45,11 @@ def _action_1(ctx: Context) -> None:
     d = ctx.data
     d["target_id"] = ctx.field("target_id")
     d["target_pose"] = ctx.field("pose")
+
+
+def _action_2(ctx: Context) -> None:
+    d = ctx.data
+    ctx.send("targetRescued", {"target_id": d["target_id"]})
 
 
 def build_state_machine() -> smach.StateMachine:
@@ -81,7 +92,7 @@ def make_operating() -> smach.StateMachine:
                 outcomes=["succeeded", "aborted", "preempted"],
                 input_keys=["target_id", "target_pose"],
             ),
-            transitions={"succeeded": "MoveToTarget", "aborted": "Ready"},
+            transitions={"succeeded": "MoveToTarget", "aborted": "Bidding", "preempted": "Bidding"},
         )
         smach.StateMachine.add(
             "MoveToTarget",
@@ -91,7 +102,11 @@ def make_operating() -> smach.StateMachine:
                 outcomes=["succeeded", "aborted", "preempted"],
                 input_keys=["target_pose"],
             ),
-            transitions={"succeeded": "Rescuing", "aborted": "Ready"},
+            transitions={
+                "succeeded": "Rescuing",
+                "aborted": "MoveToTarget",
+                "preempted": "MoveToTarget",
+            },
         )
         smach.StateMachine.add(
             "Rescuing",
@@ -101,7 +116,11 @@ def make_operating() -> smach.StateMachine:
                 outcomes=["succeeded", "aborted", "preempted"],
                 input_keys=["target_id", "target_pose"],
             ),
-            transitions={"succeeded": "Ready", "aborted": "Ready"},
+            transitions=[
+                smach.Transition("succeeded", "Ready", action=_action_2),
+                smach.Transition("aborted", "Rescuing"),
+                smach.Transition("preempted", "Rescuing"),
+            ],
         )
     return sm
 

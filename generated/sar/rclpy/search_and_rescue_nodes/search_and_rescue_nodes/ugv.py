@@ -12,7 +12,12 @@ CHART_NAME = "UGV"
 MEMBER_TYPE = "UGV"
 MACHINE = "UgvRescue"
 # How each event this member sends is delivered: "swarm" (every member) or "local" (itself).
-EVENT_SCOPES: dict[str, str] = {"launch": "swarm", "missionAbort": "swarm", "targetFound": "swarm"}
+EVENT_SCOPES: dict[str, str] = {
+    "launch": "swarm",
+    "missionAbort": "swarm",
+    "targetFound": "swarm",
+    "targetRescued": "swarm",
+}
 # Every field of each event this member receives, with the value it holds when the sender
 # leaves it out (docs/semantics.md, the value rule).
 EVENT_FIELDS: dict[str, dict[str, Any]] = {
@@ -25,7 +30,8 @@ EVENT_FIELDS: dict[str, dict[str, Any]] = {
                 "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
             },
         },
-    }
+    },
+    "targetRescued": {"target_id": 0},
 }
 # The behaviours this member runs, in the member's namespace: on the interface the model
 # declares (binding=), else as an action of the interface package.
@@ -280,6 +286,11 @@ def _args_4(ctx: Context) -> dict[str, Any]:
     return {"target_id": d["target_id"], "target_pose": d["target_pose"]}
 
 
+def _action_5(ctx: Context) -> None:
+    d = ctx.data
+    ctx.send("targetRescued", {"target_id": d["target_id"]})
+
+
 def build() -> Chart:
     """The statechart of member type UGV, ready for the engine."""
     b = ChartBuilder(
@@ -313,7 +324,8 @@ def build() -> Chart:
         ),
     )
     b.transition("Bidding", ("outcome.Bidding.succeeded",), ("MoveToTarget",))
-    b.transition("Bidding", ("outcome.Bidding.aborted",), ("Ready",))
+    b.transition("Bidding", ("outcome.Bidding.aborted",), ("Bidding",))
+    b.transition("Bidding", ("outcome.Bidding.preempted",), ("Bidding",))
     b.node(
         "MoveToTarget",
         "state",
@@ -322,7 +334,8 @@ def build() -> Chart:
         call=Call("MoveTo", "HardwareFunction", _args_3, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition("MoveToTarget", ("outcome.MoveToTarget.succeeded",), ("Rescuing",))
-    b.transition("MoveToTarget", ("outcome.MoveToTarget.aborted",), ("Ready",))
+    b.transition("MoveToTarget", ("outcome.MoveToTarget.aborted",), ("MoveToTarget",))
+    b.transition("MoveToTarget", ("outcome.MoveToTarget.preempted",), ("MoveToTarget",))
     b.node(
         "Rescuing",
         "state",
@@ -330,8 +343,9 @@ def build() -> Chart:
         name="Rescuing",
         call=Call("Rescue", "ComplexBehavior", _args_4, (), ("succeeded", "aborted", "preempted")),
     )
-    b.transition("Rescuing", ("outcome.Rescuing.succeeded",), ("Ready",))
-    b.transition("Rescuing", ("outcome.Rescuing.aborted",), ("Ready",))
+    b.transition("Rescuing", ("outcome.Rescuing.succeeded",), ("Ready",), action=_action_5)
+    b.transition("Rescuing", ("outcome.Rescuing.aborted",), ("Rescuing",))
+    b.transition("Rescuing", ("outcome.Rescuing.preempted",), ("Rescuing",))
     b.transition("Operating", ("missionAbort",), ("Stopped",))
     b.node("Stopped", "final", None, name="Stopped")
     b.initial(None, ("Operating",))

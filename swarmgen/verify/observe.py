@@ -1,0 +1,243 @@
+"""User properties as observers of the search: each state's atoms, each edge's events, the
+first violation of a safety property (BFS: the shortest), and the graph the liveness check
+(`liveness`) needs (docs/verify.md, "User properties").
+
+A run is a sequence of states joined by steps; its **positions** are the initial state and the
+state after each step, and the atoms of a position are those of its state plus the events the
+step sent (a member's send or emission, or the station's event). `always P` holds when P holds
+at every position, `never P` when it holds at none; the other operators are checked on the
+recorded graph under the fairness assumption (`liveness`).
+"""
+
+from __future__ import annotations
+
+import operator
+from array import array
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from swarmgen.props.tree import (
+    Atom,
+    Bool,
+    Both,
+    Count,
+    Datum,
+    Formula,
+    InState,
+    Not,
+    Occurs,
+    Property,
+    property_atoms,
+)
+from swarmgen.span import Span
+from swarmgen.verify.state import thaw
+from swarmgen.verify.system import Effect, Step, SwarmState, System
+
+_OPS: dict[str, Callable[[Any, Any], bool]] = {
+    "==": operator.eq, "!=": operator.ne, "<": operator.lt, "<=": operator.le,
+    ">": operator.gt, ">=": operator.ge,
+}  # fmt: skip
+Position = tuple[int, frozenset[str]]  # a state's atom bits and the events of the step
+
+
+@dataclass(frozen=True)
+class Checked:
+    """A user property ready to check: its name, text, where it was written, its tree."""
+
+    name: str
+    text: str
+    span: Span
+    tree: Property
+
+
+@dataclass
+class Graph:
+    """The explored graph as flat arrays: per expanded state its first edge (`start`), per edge
+    its target, step id and event bits; per state its enabled fairness labels (`enabled`, an
+    interned set) and whether the abort was sent."""
+
+    start: dict[int, tuple[int, int]] = field(default_factory=dict)  # state -> (first, end)
+    target: array[int] = field(default_factory=lambda: array("l"))
+    step: array[int] = field(default_factory=lambda: array("l"))
+    events: list[frozenset[str]] = field(default_factory=list)
+    enabled: dict[int, int] = field(default_factory=dict)  # state -> label set id
+    label_sets: list[frozenset[int]] = field(default_factory=list)
+    aborted: set[int] = field(default_factory=set)
+    steps: list[Step] = field(default_factory=list)  # step ids -> steps
+    labels: dict[tuple[Any, ...], int] = field(default_factory=dict)  # fairness labels
+
+    def edges(self, state: int) -> range:
+        """The indices of a state's edges (empty for a state never expanded)."""
+        first, end = self.start.get(state, (0, 0))
+        return range(first, end)
+
+
+class Observer:
+    """The atoms of every state and the events of every edge, for the properties given."""
+
+    def __init__(self, system: System, props: Sequence[Checked], record: bool) -> None:
+        self.system = system
+        self.props = list(props)
+        self.record = record  # keep the graph (liveness properties)
+        self.atoms: list[Atom] = []
+        for prop in self.props:
+            for atom in property_atoms(prop.tree):
+                if not isinstance(atom, Occurs | Bool) and atom not in self.atoms:
+                    self.atoms.append(atom)
+        self.bits: dict[int, int] = {}  # state number -> its atoms' truth, one bit each
+        self.graph = Graph()
+        self.safety: dict[int, tuple[int, Step | None]] = {}  # property -> (state, last step)
+        self._facts: dict[int, tuple[frozenset[str], dict[str, Any]]] = {}
+        self._step_ids: dict[Step, int] = {}
+        self._sets: dict[frozenset[int], int] = {}
+        self._watched = {a.member for a in self.atoms if not isinstance(a, Occurs | Bool)}
+
+    # --- the search's hooks -------------------------------------------------------------
+
+    def projection(self, value: int) -> Any:
+        """What the properties observe of a member value (partial-order reduction keeps
+        steps that change it)."""
+        if not self.atoms:
+            return None
+        kind = self.system.kinds[self.system.value_type[value]].name
+        if kind not in self._watched:
+            return None
+        names, data = self.facts(value)
+        return names, tuple(sorted(data.items(), key=lambda kv: kv[0]))
+
+    def discovered(self, number: int, state: SwarmState) -> None:
+        """A new state: its atoms."""
+        self.bits[number] = self._bits(state)
+        if state.aborted:
+            self.graph.aborted.add(number)
+        if number == 0:
+            self._check_safety(0, None, (self.bits[0], frozenset()))
+
+    def edges(
+        self,
+        number: int,
+        steps: Sequence[Step],
+        successors: Sequence[tuple[int, Effect]],
+        taken: Sequence[Step],
+    ) -> None:
+        """An expanded state: its enabled steps, and its successors by the steps taken."""
+        graph = self.graph
+        if self.record:
+            labels = frozenset(self.label(s) for s in steps) - {-1}
+            graph.enabled[number] = self._set(labels)
+            graph.start[number] = (len(graph.target), len(graph.target) + len(successors))
+        for step, (target, effect) in zip(taken, successors, strict=True):
+            events = _events(effect)
+            if self.record:
+                graph.target.append(target)
+                graph.step.append(self._step(step))
+                graph.events.append(events)
+            self._check_safety(number, step, (self.bits[target], events), target)
+
+    # --- evaluation -----------------------------------------------------------------------
+
+    def holds(self, formula: Formula, position: Position) -> bool:
+        """The formula's truth at a position (its state's atom bits, its step's events)."""
+        bits, events = position
+        if isinstance(formula, Not):
+            return not self.holds(formula.operand, position)
+        if isinstance(formula, Both):
+            left = self.holds(formula.left, position)
+            if formula.kind == "and":
+                return left and self.holds(formula.right, position)
+            return left or self.holds(formula.right, position)
+        if isinstance(formula, Bool):
+            return formula.value
+        if isinstance(formula, Occurs):
+            return formula.event in events
+        return bool(bits >> self.atoms.index(formula) & 1)
+
+    def facts(self, value: int) -> tuple[frozenset[str], dict[str, Any]]:
+        """A member value's active state names and data (computed once per value)."""
+        known = self._facts.get(value)
+        if known is None:
+            member = self.system.values[value]
+            chart = self.system.kinds[self.system.value_type[value]].chart
+            names = frozenset(chart.names.get(n, n) for n in member.engine.config)
+            data = thaw(member.engine.data) or {}
+            known = self._facts[value] = (names, dict(data))
+        return known
+
+    def _bits(self, state: SwarmState) -> int:
+        found = 0
+        for bit, atom in enumerate(self.atoms):
+            if self._atom(atom, state):
+                found |= 1 << bit
+        return found
+
+    def _atom(self, atom: Atom, state: SwarmState) -> bool:
+        system = self.system
+        values = [
+            v
+            for i, v in enumerate(state.members)
+            if system.kinds[system.types[i]].name == getattr(atom, "member", "")
+        ]
+        if isinstance(atom, Count):
+            count = sum(atom.state in self.facts(v)[0] for v in values)
+            return _OPS[atom.op](count, atom.value)
+        if isinstance(atom, InState):
+            inside = (atom.state in self.facts(v)[0] for v in values)
+            return all(inside) if atom.quantifier == "every" else any(inside)
+        if isinstance(atom, Datum):
+            results = (_compare(self.facts(v)[1].get(atom.datum), atom) for v in values)
+            return all(results) if atom.quantifier == "every" else any(results)
+        return False
+
+    def _check_safety(
+        self, number: int, step: Step | None, position: Position, target: int = 0
+    ) -> None:
+        for index, prop in enumerate(self.props):
+            if index in self.safety or prop.tree.kind not in ("always", "never"):
+                continue
+            value = self.holds(prop.tree.left, position)
+            if value != (prop.tree.kind == "always"):
+                self.safety[index] = (number, step) if step is not None else (0, None)
+
+    def _label(self, step: Step) -> int:
+        if step.kind == "station":
+            key: tuple[Any, ...] = ("station", step.event)
+        else:
+            key = (self.system.types[step.member], step.kind, step.event, step.state, step.data)
+        known = self.graph.labels.get(key)
+        if known is None:
+            known = self.graph.labels[key] = len(self.graph.labels)
+        return known
+
+    def label(self, step: Step) -> int:
+        """The fairness label of a step (-1 for the station's abort, which is never forced)."""
+        if step.kind == "station" and step.event in self.system.abort:
+            return -1
+        return self._label(step)
+
+    def _set(self, labels: frozenset[int]) -> int:
+        known = self._sets.get(labels)
+        if known is None:
+            known = self._sets[labels] = len(self.graph.label_sets)
+            self.graph.label_sets.append(labels)
+        return known
+
+    def _step(self, step: Step) -> int:
+        known = self._step_ids.get(step)
+        if known is None:
+            known = self._step_ids[step] = len(self.graph.steps)
+            self.graph.steps.append(step)
+        return known
+
+
+def _events(effect: Effect) -> frozenset[str]:
+    if effect.source == "station":
+        return frozenset((effect.event,))
+    return frozenset(effect.sent)
+
+
+def _compare(value: Any, atom: Datum) -> bool:
+    try:
+        return bool(_OPS[atom.op](value, atom.value))
+    except TypeError:
+        return False
