@@ -80,8 +80,11 @@ typecheck-bare: pyproject.toml
 
 # Everything the tests use is installed above, so nothing may be skipped but the tests over the
 # reference corpus when it is absent (tests/skips.py; SWARMGEN_REFERENCE_DIR points to it).
+# Two xdist workers, a test file at a time, longest files first (tests/conftest.py): much of the
+# suite waits on subprocesses (Qt, ROS 2 discovery, cmake), so two workers overlap the waits.
+PYTEST_WORKERS ?= 2
 pytest: $(STAMP) $(ROS_STAMP) $(STUDY_STAMP) sysdeps
-	SWARMGEN_STRICT_SKIPS=1 $(BIN)/pytest -q
+	SWARMGEN_STRICT_SKIPS=1 $(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile --no-loadscope-reorder
 
 ## golden: rewrite the golden files after reviewing the diff
 golden: $(STAMP)

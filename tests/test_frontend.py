@@ -38,7 +38,7 @@ def _without_spans(model: Model) -> dict[str, object]:
 
     def strip(node: object) -> object:
         if isinstance(node, dict):
-            return {k: strip(v) for k, v in node.items() if k != "span"}
+            return {k: strip(v) for k, v in node.items() if k != "span" and not k.endswith("_span")}
         if isinstance(node, list):
             return [strip(v) for v in node]
         return node

@@ -242,7 +242,8 @@ def test_preemption_cancels_behaviours_and_hooks_see_active_states(tmp_path: Pat
                     event_scopes=uav.EVENT_SCOPES,
                 )
             )
-            await _wait(lambda: len(library.started) == 2)()
+            # before launch only positioning runs (target monitoring starts on launch)
+            await _wait(lambda: len(library.started) == 1)()
             assert sm.is_running() and sm.get_active_states() == ["Mission"]
             assert sm.userdata.altitude == 1.5
             bus.broadcast("launch")
@@ -267,10 +268,11 @@ def test_preemption_cancels_behaviours_and_hooks_see_active_states(tmp_path: Pat
         "Mission",
         "Positioning",
         "SarBehavior",
+        "Standby",
         "SwarmFunctions",
-        "TargetMonitoring",
     ]
     assert "TakeOff" in published[-1] and "Idle" not in published[-1]
+    assert "TargetMonitoring" in published[-1] and "Standby" not in published[-1]
 
 
 def test_execution_ends_with_the_final_state_label(tmp_path: Path) -> None:
