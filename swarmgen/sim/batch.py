@@ -147,8 +147,10 @@ class Batch:
         self._outputs: dict[str, tuple[tuple[str, str | None], ...]] = {}
         self.scopes: dict[str, str] = {}
         self._initials: dict[tuple[str, str], Any] = {}
+        self._emits: dict[str, tuple[str, ...]] = {}
         for m in machines.members:
             self._outputs.update(m.outputs)
+            self._emits.update(m.emits)
             self.scopes.update(m.scopes)
             self._initials.update(m.initials)
         self.world = self._world(kinds, counts)
@@ -279,6 +281,10 @@ class Batch:
     def outputs_of(self, behaviour: str) -> tuple[tuple[str, str | None], ...]:
         """The outputs (identifier, type) a behaviour declares."""
         return self._outputs.get(behaviour, ())
+
+    def emits_of(self, behaviour: str) -> tuple[str, ...]:
+        """The events a behaviour's `emits` tag names."""
+        return self._emits.get(behaviour, ())
 
     def initial_of(self, owner: str, name: str) -> Any:
         """The initial value of a behaviour's output or an event's field (None: unknown)."""

@@ -19,7 +19,7 @@ the asyncio backend's simulated behaviours do). The implementations:
 | TaskAllocation (SelectRover) | the finder of the target auctions it: after `timing.allocation` ticks it assigns a bidding UGV (`allocation`: `paired`, the one that started where this member started; or `nearest`), emits `targetAssigned` and succeeds with `rover_id`; no bidder: `aborted` and the target can be found again. A member that did not find the target aborts at once |
 | TaskBidding | bids for its target; succeeds when the auction assigns it, aborts when it assigns another or after `timing.bid_timeout` ticks |
 | MoveTo | drives straight to the position in its pose argument (`poses.position_of`) at one patch per tick |
-| Rescue | after `timing.rescue` ticks the target is rescued: emits `targetRescued` |
+| Rescue | after `timing.rescue` ticks the target is rescued; emits `targetRescued` if the behaviour's `emits` tag names it (else the machine announces the rescue itself) |
 | Tracking | hovers until its target is rescued, then succeeds |
 | LocalCoverage | succeeds after `timing.local_coverage` ticks with the member's current target |
 | anything else | succeeds after `timing.default` ticks with zero-valued outputs |
@@ -87,6 +87,9 @@ class Host(Protocol):
 
     def activation_of(self, g: int, impl: SimBehaviour) -> Activation | None:
         """The member's live activation of an implementation, if any."""
+
+    def emits_of(self, behaviour: str) -> tuple[str, ...]:
+        """The events a behaviour's `emits` tag names."""
 
     def initial_of(self, owner: str, name: str) -> Any:
         """The initial value of a behaviour's output or an event's field (None: unknown)."""
@@ -378,7 +381,8 @@ class MoveTo(SimBehaviour):
 
 
 class Rescue(SimBehaviour):
-    """Rescues the member's target after `timing.rescue` ticks and emits `targetRescued`."""
+    """Rescues the member's target after `timing.rescue` ticks (and emits `targetRescued` if the
+    behaviour declares it)."""
 
     name = "Rescue"
 
@@ -394,7 +398,8 @@ class Rescue(SimBehaviour):
                 host.finish(act, outcome(act, "aborted"), None)
                 return
             host.world.rescue(act.run, target, host.now(act.run))
-            host.emit(act, "targetRescued", {"target_id": target + 1})
+            if "targetRescued" in host.emits_of(act.behaviour):  # else the machine announces it
+                host.emit(act, "targetRescued", {"target_id": target + 1})
             self.tracking.rescued(host, act.run, target)
             host.finish(act, outcome(act, "succeeded"), None)
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -30,6 +30,8 @@ class MemberMachine:
     # (behaviour or event, output or field) -> its initial value: the shape of the model's
     # type (a pose's nested fields) that the library fills in
     initials: dict[tuple[str, str], Any]
+    # behaviour -> the events its `emits` tag names (a simulated behaviour sends only those)
+    emits: dict[str, tuple[str, ...]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -91,6 +93,7 @@ def machines_of(
                 {b.name: b.outputs for b in chart.behaviours},
                 {e.name: e.scope or "swarm" for e in chart.events},
                 _initials(chart),
+                {b.name: b.emits for b in validation.model.behaviours},
             )
         )
     if not members:

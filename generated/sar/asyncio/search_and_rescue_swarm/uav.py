@@ -61,13 +61,14 @@ def _args_5(ctx: Context) -> dict[str, Any]:
     return {"target_id": d["target_id"], "altitude": d["altitude"], "rover_id": d["rover_id"]}
 
 
-def _args_6(ctx: Context) -> dict[str, Any]:
+def _cond_6(ctx: Context) -> bool:
     d = ctx.data
-    return {"altitude": d["altitude"]}
+    return bool(ctx.field("target_id") == d["target_id"])
 
 
 def _args_7(ctx: Context) -> dict[str, Any]:
-    return {}
+    d = ctx.data
+    return {"altitude": d["altitude"]}
 
 
 def _args_8(ctx: Context) -> dict[str, Any]:
@@ -75,6 +76,10 @@ def _args_8(ctx: Context) -> dict[str, Any]:
 
 
 def _args_9(ctx: Context) -> dict[str, Any]:
+    return {}
+
+
+def _args_10(ctx: Context) -> dict[str, Any]:
     return {}
 
 
@@ -163,7 +168,7 @@ def build() -> Chart:
     b.transition("Tracking", ("outcome.Tracking.succeeded",), ("Coverage",))
     b.transition("Tracking", ("outcome.Tracking.targetLost",), ("LocalCoverage",))
     b.transition("Tracking", ("outcome.Tracking.aborted",), ("LocalCoverage",))
-    b.transition("Tracking", ("targetRescued",), ("Coverage",))
+    b.transition("Tracking", ("targetRescued",), ("Coverage",), cond=_cond_6)
     b.node(
         "LocalCoverage",
         "state",
@@ -172,7 +177,7 @@ def build() -> Chart:
         call=Call(
             "LocalCoverage",
             "SwarmBehavior",
-            _args_6,
+            _args_7,
             (("target_id", "target_id"), ("target_pose", "target_pose")),
             ("succeeded", "aborted", "preempted"),
         ),
@@ -189,7 +194,7 @@ def build() -> Chart:
         "SwarmFunctions",
         name="TargetMonitoring",
         call=Call(
-            "TargetMonitoring", "SwarmFunction", _args_7, (), ("succeeded", "aborted", "preempted")
+            "TargetMonitoring", "SwarmFunction", _args_8, (), ("succeeded", "aborted", "preempted")
         ),
     )
     b.node("HardwareFunctions", "state", "Mission", name="HardwareFunctions")
@@ -200,7 +205,7 @@ def build() -> Chart:
         "HardwareFunctions",
         name="Positioning",
         call=Call(
-            "UwbPositioning", "HardwareFunction", _args_8, (), ("succeeded", "aborted", "preempted")
+            "UwbPositioning", "HardwareFunction", _args_9, (), ("succeeded", "aborted", "preempted")
         ),
     )
     b.transition("Mission", ("missionAbort",), ("Land",))
@@ -209,7 +214,7 @@ def build() -> Chart:
         "state",
         None,
         name="Land",
-        call=Call("Land", "HardwareFunction", _args_9, (), ("succeeded", "aborted", "preempted")),
+        call=Call("Land", "HardwareFunction", _args_10, (), ("succeeded", "aborted", "preempted")),
     )
     b.transition("Land", ("outcome.Land.succeeded",), ("Landed",))
     b.transition("Land", ("outcome.Land.aborted",), ("Land",))

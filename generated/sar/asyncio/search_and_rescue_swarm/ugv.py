@@ -93,8 +93,8 @@ def build() -> Chart:
         ),
     )
     b.transition("Bidding", ("outcome.Bidding.succeeded",), ("MoveToTarget",))
-    b.transition("Bidding", ("outcome.Bidding.aborted",), ("Bidding",))
-    b.transition("Bidding", ("outcome.Bidding.preempted",), ("Bidding",))
+    b.transition("Bidding", ("outcome.Bidding.aborted",), ("Ready",))
+    b.transition("Bidding", ("outcome.Bidding.preempted",), ("Ready",))
     b.node(
         "MoveToTarget",
         "state",

@@ -48,6 +48,11 @@ def _action_1(ctx: Context) -> None:
     d["target_pose"] = ctx.field("pose")
 
 
+def _cond_2(ctx: Context) -> bool:
+    d = ctx.data
+    return bool(ctx.field("target_id") == d["target_id"])
+
+
 def build_state_machine() -> smach.StateMachine:
     # member UAV
     sm = smach.StateMachine(outcomes=["Landed"])
@@ -145,12 +150,12 @@ def make_sar_behavior() -> smach.StateMachine:
                 outcomes=["succeeded", "aborted", "preempted", "targetLost"],
                 input_keys=["target_id", "altitude", "rover_id"],
             ),
-            transitions={
-                "succeeded": "Coverage",
-                "targetLost": "LocalCoverage",
-                "aborted": "LocalCoverage",
-                "targetRescued": "Coverage",
-            },
+            transitions=[
+                smach.Transition("succeeded", "Coverage"),
+                smach.Transition("targetLost", "LocalCoverage"),
+                smach.Transition("aborted", "LocalCoverage"),
+                smach.Transition("targetRescued", "Coverage", guard=_cond_2),
+            ],
         )
         smach.StateMachine.add(
             "LocalCoverage",

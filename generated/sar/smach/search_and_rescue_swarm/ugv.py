@@ -92,7 +92,7 @@ def make_operating() -> smach.StateMachine:
                 outcomes=["succeeded", "aborted", "preempted"],
                 input_keys=["target_id", "target_pose"],
             ),
-            transitions={"succeeded": "MoveToTarget", "aborted": "Bidding", "preempted": "Bidding"},
+            transitions={"succeeded": "MoveToTarget", "aborted": "Ready", "preempted": "Ready"},
         )
         smach.StateMachine.add(
             "MoveToTarget",
