@@ -141,9 +141,11 @@ class Batch:
         self.config = config
         self.reps = list(reps)
         runs = len(self.reps)
-        self.geometry = Geometry(scenario.width, scenario.height, scenario.view)
         counts = dict(config.counts)
         kinds = [m for m in machines.members if counts.get(m.member_type, 0) > 0]
+        # the grid is padded by the largest view of the members it holds
+        views = [scenario.view_of(m.member_type) for m in kinds]
+        self.geometry = Geometry(scenario.width, scenario.height, max(views, default=scenario.view))
         self._outputs: dict[str, tuple[tuple[str, str | None], ...]] = {}
         self.scopes: dict[str, str] = {}
         self._initials: dict[tuple[str, str], Any] = {}
@@ -171,9 +173,10 @@ class Batch:
     def _world(self, kinds: list[MemberMachine], counts: dict[str, int]) -> World:
         """Every run's world: the members in a line along the south edge, targets drawn per run."""
         scenario, geo = self.scenario, self.geometry
-        xs, ys, heads = [], [], []
+        xs, ys, heads, views = [], [], [], []
         for m in kinds:
             n = counts[m.member_type]
+            views.append(np.full(n, scenario.view_of(m.member_type), dtype=np.int64))
             place = scenario.placement_of(m.member_type)
             x, y = south_line(n, geo, place.spacing)
             xs.append(x)
@@ -192,6 +195,7 @@ class Batch:
             np.concatenate(ys) if ys else empty,
             np.concatenate(heads) if heads else empty,
             np.array(targets, dtype=np.int64).reshape(len(self.reps), self.config.targets, 2),
+            np.concatenate(views) if views else None,
         )
 
     def _populate(self, run: int, layout: list[tuple[MemberMachine, int]]) -> None:

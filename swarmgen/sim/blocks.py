@@ -105,13 +105,17 @@ def entering(
     full: NDArray[np.bool_],
     geometry: Geometry,
     view_offsets: NDArray[np.signedinteger],
+    view: int | None = None,
 ) -> NDArray[np.signedinteger]:
     """The padded patches a step from `before` to `now` (padded flat indices) brings into view:
     the view around `now` less the view around `before`, whose patches are all seen already (a
     patch is stood on only with its whole view). Where `full` or the step is not to a
     neighbour, the whole view. A one-patch step adds one column and/or one row of the view, so
-    this is 3 to 5 patches instead of 9 (the corner may repeat: callers drop repeats)."""
-    v, pw = geometry.view, geometry.width + 2 * geometry.view
+    this is 3 to 5 patches instead of 9 (the corner may repeat: callers drop repeats).
+    `view`: the stepping members' view radius when it is less than the padding's
+    (`geometry.view`, the largest); `view_offsets` are then that view's."""
+    pw = geometry.width + 2 * geometry.view
+    v = geometry.view if view is None else view
     if v == 0:
         return now
     delta = now - before

@@ -101,6 +101,13 @@ class Points:
         """The member passing each point `at`."""
         return self.gm[self.piece(at)]
 
+    def select(self, pieces: Bool) -> Points:
+        """The points of the pieces flagged (in their order)."""
+        sizes = np.diff(self.first, append=len(self.flat))
+        keep = np.repeat(pieces, sizes)
+        kept = sizes[pieces]
+        return Points(self.gm[pieces], np.cumsum(kept) - kept, self.tick[keep], self.flat[keep])
+
     def until(self, end: I64, cells: int) -> Points:
         """The points at or before each run's end tick (pieces become one per point)."""
         keep = np.flatnonzero(self.tick <= end[self.flat // cells])

@@ -3,7 +3,10 @@
 A bounded grid of `width` x `height` patches without obstacles; patch (i, j) is the unit square
 centred on the point (i, j), so a body at (x, y) stands on patch (floor(x + 0.5), floor(y + 0.5)).
 Members move one patch length per tick. A member sees the patches within `view` of its own in
-both axes (view 1: its patch and the 8 around it, the Moore neighbourhood).
+both axes (view 1: its patch and the 8 around it, the Moore neighbourhood). Member types may
+see differently (`Scenario.views`): the members of one view radius form a *sight* class, and
+what they stood on, and which patches have a target in their view, is kept per class; the
+grid's padding is the largest view, and which patches are seen is shared by all.
 
 The batch holds `runs` independent repetitions with the same composition; member `g` of the
 batch is member `g % per_run` of run `g // per_run`. Everything is an array over all members or
@@ -63,9 +66,11 @@ class World:
         start_y: F64,
         headings: F64,
         targets: I64,
+        views: I64 | None = None,
     ) -> None:
         """`start_x`, `start_y`, `headings`: per member of one run; `run_keys`: one random key
-        per run; `targets`: (runs, count, 2) patch coordinates."""
+        per run; `targets`: (runs, count, 2) patch coordinates; `views`: per member of one run,
+        its view radius, at most `geometry.view` (default: that view for every member)."""
         self.geometry = geo = geometry
         self.W, self.H, self.v = geo.width, geo.height, geo.view
         self.WH = geo.cells
@@ -74,6 +79,10 @@ class World:
         self.runs = runs = len(run_keys)
         self.per_run = per_run = len(start_x)
         self.run_of: I64 = np.repeat(np.arange(runs, dtype=np.int64), per_run)
+        own = np.full(per_run, geo.view, dtype=np.int64) if views is None else np.asarray(views)
+        # the sight classes: their view radii, and each member's class
+        self.views: list[int] = sorted({int(v) for v in own}) or [geo.view]
+        self.sight: I64 = np.tile(np.searchsorted(self.views, own), runs).astype(np.int64)
         self._init_bodies(run_keys, start_x, start_y, headings)
         self.blocks = Blocks(runs, geo)  # before the targets: their views mark blocks
         self._init_coverage()
@@ -108,20 +117,23 @@ class World:
         self.reports: Bool = np.zeros(count, dtype=np.bool_)  # its Coverage ends on a find
 
     def _init_coverage(self) -> None:
-        """Coverage: first tick on each patch, which patches were stood on / seen (the seen
-        flags are padded by `view` so a view never needs bounds checks), patches seen per run."""
-        runs = self.runs
-        self.first: NDArray[np.int32] = np.full(runs * self.WH, INF, dtype=np.int32)
-        self.stood: NDArray[np.uint8] = np.zeros(runs * self.WH, dtype=np.uint8)
+        """Coverage: per sight class the first tick on each patch and which patches were stood
+        on; which patches were seen (the flags are padded by the largest view so a view never
+        needs bounds checks); patches seen per run."""
+        runs, classes = self.runs, len(self.views)
+        self.first: NDArray[np.int32] = np.full((classes, runs * self.WH), INF, dtype=np.int32)
+        self.stood: NDArray[np.uint8] = np.zeros((classes, runs * self.WH), dtype=np.uint8)
         seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
         seen[:, self.v : self.v + self.H, self.v : self.v + self.W] = 0
         self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
         self.covered: I64 = np.zeros(runs, dtype=np.int64)
         self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
-        side = 2 * self.v + 1
-        oy_, ox_ = np.divmod(np.arange(side * side, dtype=np.int64), side)
         self._padded = padded_index(runs, self.geometry)
-        self._view_offsets = ((oy_ - self.v) * self.PW + (ox_ - self.v)).astype(self._padded.dtype)
+        self._view_offsets = []  # per sight class: its view around a patch, in the padded grid
+        for v in self.views:
+            oy_, ox_ = np.divmod(np.arange((2 * v + 1) ** 2, dtype=np.int64), 2 * v + 1)
+            offsets = ((oy_ - v) * self.PW + (ox_ - v)).astype(self._padded.dtype)
+            self._view_offsets.append(offsets)
 
     def _init_targets(self, targets: I64) -> None:
         """Where the targets are, their status and the ticks of what happened to them."""
@@ -137,8 +149,8 @@ class World:
         self.rescued_tick: I64 = np.full(shape, -1, dtype=np.int64)
         self.unfound: I64 = np.full(runs, shape[1], dtype=np.int64)
         self.fresh: list[list[int]] = [[] for _ in range(runs)]  # reported this tick
-        # near[c] > 0: an unfound target is in view from patch c
-        self.near: NDArray[np.int16] = np.zeros(runs * self.WH, dtype=np.int16)
+        # near[k, c] > 0: an unfound target is in the view of sight class k from patch c
+        self.near: NDArray[np.int16] = np.zeros((len(self.views), runs * self.WH), dtype=np.int16)
         for run in range(runs):
             for target in range(shape[1]):
                 self._near_add(run, target, 1)
@@ -369,7 +381,7 @@ class World:
         points = self._pieces(movers, now[runs], horizon[runs])
         finds: list[tuple[int, int, int, int]] = []
         if len(points) and watching:
-            hit = np.flatnonzero(self.near[points.flat] > 0)
+            hit = np.flatnonzero(self._near_points(points) > 0)
             hit = hit[watch[points.members(hit)]]
             if hit.size:
                 hit_runs = points.flat[hit] // self.WH
@@ -388,21 +400,42 @@ class World:
         self._commit(points)
         return end, finds
 
+    def _near_points(self, points: Points) -> NDArray[np.int16]:
+        """`near` at each point, for the sight class of the member passing it."""
+        near: NDArray[np.int16]
+        if len(self.views) == 1:
+            near = self.near[0][points.flat]
+            return near
+        sight = np.repeat(self.sight[points.gm], np.diff(points.first, append=len(points)))
+        near = self.near[sight, points.flat]
+        return near
+
     # --- coverage and targets
 
     def _commit(self, points: Points) -> None:
-        """Record the patches members stood on. Rounds go forward in time per run, so only
-        patches never stood on before can change; the patches they bring into view are counted
-        (`covered`); *when* each patch was first seen is derived at the end (`seen_times`)."""
+        """Record the patches members stood on, per sight class (`_commit_sight`)."""
+        if len(self.views) == 1:
+            self._commit_sight(0, points)
+            return
+        sight = self.sight[points.gm]
+        for k in range(len(self.views)):
+            self._commit_sight(k, points.select(sight == k))
+
+    def _commit_sight(self, k: int, points: Points) -> None:
+        """Record the patches members of sight class k stood on. Rounds go forward in time per
+        run, so only patches never stood on before by the class can change; the patches they
+        bring into view are counted (`covered`); *when* each patch was first seen is derived at
+        the end (`seen_times`)."""
         if not len(points):
             return
-        new = np.flatnonzero(self.stood[points.flat] == 0)
+        stood = self.stood[k]
+        new = np.flatnonzero(stood[points.flat] == 0)
         if not new.size:
             return
         flat = points.flat[new]
-        np.minimum.at(self.first, flat, points.tick[new].astype(np.int32))
+        np.minimum.at(self.first[k], flat, points.tick[new].astype(np.int32))
         # a patch passed twice brings the same view: `distinct` below drops the repeats
-        self.stood[flat] = 1
+        stood[flat] = 1
         # each point's predecessor in its piece stands with its whole view seen (now or
         # before): only what the step adds can be new; a piece's first point brings its view
         start = np.zeros(len(points), dtype=np.bool_)
@@ -413,7 +446,8 @@ class World:
             self._padded[points.flat[new - 1]],  # new - 1 == -1 only at a start
             start[new],
             self.geometry,
-            self._view_offsets,
+            self._view_offsets[k],
+            self.views[k],
         )
         around = around[self.seen_flag[around] == 0]
         fresh = distinct(around, self._stamp_seen)
@@ -422,21 +456,26 @@ class World:
         self.blocks.seen(fresh)
 
     def _near_add(self, run: int, target: int, delta: int) -> None:
-        v = self.v
+        """A target enters (1) or leaves (-1) the views: every class's, and the blocks around
+        it as far as the largest view sees (`Blocks` is conservative)."""
         x, y = int(self.tx[run, target]), int(self.ty[run, target])
-        grid = self.near.reshape(self.runs, self.H, self.W)
+        for k, v in enumerate(self.views):
+            grid = self.near[k].reshape(self.runs, self.H, self.W)
+            rows = slice(max(0, y - v), min(self.H, y + v + 1))
+            cols = slice(max(0, x - v), min(self.W, x + v + 1))
+            grid[run, rows, cols] += delta
+        v = self.v  # the largest view
         rows = slice(max(0, y - v), min(self.H, y + v + 1))
         cols = slice(max(0, x - v), min(self.W, x + v + 1))
-        grid[run, rows, cols] += delta
         ys, xs = np.mgrid[rows, cols]
         self.blocks.change(self.blocks.block_of(run, xs.ravel(), ys.ravel()), delta)
 
     def targets_in_view(self, member: int, ix: int, iy: int) -> list[int]:
         """The unfound targets of the member's run within view of patch (ix, iy)."""
-        run = int(self.run_of[member])
+        run, v = int(self.run_of[member]), self.views[int(self.sight[member])]
         near = (
-            (np.abs(self.tx[run] - ix) <= self.v)
-            & (np.abs(self.ty[run] - iy) <= self.v)
+            (np.abs(self.tx[run] - ix) <= v)
+            & (np.abs(self.ty[run] - iy) <= v)
             & (self.status[run] == UNFOUND)
         )
         return [int(t) for t in np.flatnonzero(near)]
@@ -480,13 +519,13 @@ class World:
 
     def seen_times(self, run: int) -> NDArray[np.int32]:
         """When each patch of a run was first seen (INF: never), as a (height, width) grid: the
-        minimum of `first` over the view around each patch."""
-        v = self.v
-        first = self.first.reshape(self.runs, self.H, self.W)[run]
-        padded = np.full((self.PH, self.PW), INF, dtype=np.int32)
-        padded[v : v + self.H, v : v + self.W] = first
+        minimum, over the sight classes, of their `first` over their view around each patch."""
         seen = np.full((self.H, self.W), INF, dtype=np.int32)
-        for oy in range(2 * v + 1):
-            for ox in range(2 * v + 1):
-                np.minimum(seen, padded[oy : oy + self.H, ox : ox + self.W], out=seen)
+        for k, v in enumerate(self.views):
+            first = self.first[k].reshape(self.runs, self.H, self.W)[run]
+            padded = np.full((self.H + 2 * v, self.W + 2 * v), INF, dtype=np.int32)
+            padded[v : v + self.H, v : v + self.W] = first
+            for oy in range(2 * v + 1):
+                for ox in range(2 * v + 1):
+                    np.minimum(seen, padded[oy : oy + self.H, ox : ox + self.W], out=seen)
         return seen
