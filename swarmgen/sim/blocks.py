@@ -13,6 +13,8 @@ never changes a number; it only saves the work of patches that cannot matter.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -31,21 +33,9 @@ class Blocks:
         self.runs = runs
         self.bw = -(-self.W // SIZE)
         self.bh = -(-self.H // SIZE)
-        xs = np.bincount(np.arange(self.W) // SIZE, minlength=self.bw)
-        ys = np.bincount(np.arange(self.H) // SIZE, minlength=self.bh)
-        per_run = (ys[:, None] * xs[None, :]).astype(np.int64).reshape(-1)
-        self.dirty: I64 = np.tile(per_run, runs)  # (runs * bh * bw,)
+        start, self.of_padded = _layout(runs, geometry)
+        self.dirty: I64 = start.copy()  # (runs * bh * bw,)
         self._table: NDArray[np.int64] | None = None
-        # the block of each padded patch (the padding takes its nearest patch's): one look-up
-        # per newly seen patch instead of two divisions
-        ph, pw = self.H + 2 * self.v, self.W + 2 * self.v
-        dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
-        by = np.clip(np.arange(ph) - self.v, 0, self.H - 1) // SIZE
-        bx = np.clip(np.arange(pw) - self.v, 0, self.W - 1) // SIZE
-        lut = ((np.arange(runs)[:, None] * self.bh + by[None, :]) * self.bw).astype(dtype)
-        self.of_padded: NDArray[np.signedinteger] = np.add(
-            lut[:, :, None], bx.astype(dtype)[None, None, :]
-        ).ravel()
 
     def block_of(self, run: I64 | int, x: I64, y: I64) -> I64:
         """The flat block index of patches (x, y) of runs `run`."""
@@ -87,16 +77,41 @@ class Blocks:
         return touched
 
 
+@functools.lru_cache(maxsize=4)
+def _layout(runs: int, geometry: Geometry) -> tuple[I64, NDArray[np.signedinteger]]:
+    """The blocks' starting counts (every patch unseen), and the block of each padded patch
+    (the padding takes its nearest patch's: one look-up per newly seen patch instead of two
+    divisions). Shared, read-only, by the batches of one process with the same grid."""
+    w, h, v = geometry.width, geometry.height, geometry.view
+    bw, bh = -(-w // SIZE), -(-h // SIZE)
+    xs = np.bincount(np.arange(w) // SIZE, minlength=bw)
+    ys = np.bincount(np.arange(h) // SIZE, minlength=bh)
+    per_run = (ys[:, None] * xs[None, :]).astype(np.int64).reshape(-1)
+    ph, pw = h + 2 * v, w + 2 * v
+    dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
+    by = np.clip(np.arange(ph) - v, 0, h - 1) // SIZE
+    bx = np.clip(np.arange(pw) - v, 0, w - 1) // SIZE
+    lut = ((np.arange(runs)[:, None] * bh + by[None, :]) * bw).astype(dtype)
+    of_padded = np.add(lut[:, :, None], bx.astype(dtype)[None, None, :]).ravel()
+    start = np.tile(per_run, runs)
+    for array in (start, of_padded):
+        array.setflags(write=False)
+    return start, of_padded
+
+
+@functools.lru_cache(maxsize=4)
 def padded_index(runs: int, geometry: Geometry) -> NDArray[np.signedinteger]:
-    """For each patch (flat, run included) its flat index in the grid padded by `view`."""
+    """For each patch (flat, run included) its flat index in the grid padded by `view`
+    (shared, read-only, by the batches of one process with the same grid)."""
     v, w, h = geometry.view, geometry.width, geometry.height
     ph, pw = h + 2 * v, w + 2 * v
     dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
     rows = ((np.arange(runs)[:, None] * ph + np.arange(h)[None, :] + v) * pw + v).astype(dtype)
     index: NDArray[np.signedinteger] = np.add(
         rows[:, :, None], np.arange(w, dtype=dtype)[None, None, :]
-    )
-    return index.ravel()
+    ).ravel()
+    index.setflags(write=False)
+    return index
 
 
 def entering(
