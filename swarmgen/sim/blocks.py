@@ -21,7 +21,6 @@ from numpy.typing import NDArray
 from swarmgen.sim.grid import I64, Geometry
 
 SIZE = 8  # patches per block side
-STRETCH = 16  # steps per stretch tested against the index
 
 
 class Blocks:

@@ -36,7 +36,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmgen.sim.blocks import STRETCH, Blocks, entering, padded_index
+from swarmgen.sim.blocks import Blocks, entering, padded_index
 from swarmgen.sim.grid import (
     BLOCK,
     F64,
@@ -44,6 +44,7 @@ from swarmgen.sim.grid import (
     I64,
     INF,
     MEMBER_KEY,
+    STRETCH,
     U64,
     Bool,
     Geometry,
@@ -122,13 +123,19 @@ class World:
         needs bounds checks); patches seen per run."""
         runs, classes = self.runs, len(self.views)
         self.first: NDArray[np.int32] = np.full((classes, runs * self.WH), INF, dtype=np.int32)
-        self.stood: NDArray[np.uint8] = np.zeros((classes, runs * self.WH), dtype=np.uint8)
+        # patches stood on, and past them `dummy`: the index `Points` gives past a row's end,
+        # always stood on (never new) and never near a target
+        self.dummy = runs * self.WH
+        self.stood: NDArray[np.uint8] = np.zeros((classes, self.dummy + 1), dtype=np.uint8)
+        self.stood[:, self.dummy] = 1
         seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
         seen[:, self.v : self.v + self.H, self.v : self.v + self.W] = 0
         self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
         self.covered: I64 = np.zeros(runs, dtype=np.int64)
         self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
-        self._padded = padded_index(runs, self.geometry)
+        # each patch's index in the padded grid, and `dummy`'s (0: any, it is never used)
+        index = padded_index(runs, self.geometry)
+        self._padded = np.concatenate([index, np.zeros(1, dtype=index.dtype)])
         self._view_offsets = []  # per sight class: its view around a patch, in the padded grid
         for v in self.views:
             oy_, ox_ = np.divmod(np.arange((2 * v + 1) ** 2, dtype=np.int64), 2 * v + 1)
@@ -150,7 +157,7 @@ class World:
         self.unfound: I64 = np.full(runs, shape[1], dtype=np.int64)
         self.fresh: list[list[int]] = [[] for _ in range(runs)]  # reported this tick
         # near[k, c] > 0: an unfound target is in the view of sight class k from patch c
-        self.near: NDArray[np.int16] = np.zeros((len(self.views), runs * self.WH), dtype=np.int16)
+        self.near: NDArray[np.int16] = np.zeros((len(self.views), self.dummy + 1), dtype=np.int16)
         for run in range(runs):
             for target in range(shape[1]):
                 self._near_add(run, target, 1)
@@ -217,9 +224,8 @@ class World:
             self._longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g])[0]
         )
         ix, iy = int(self.ox[member]), int(self.oy[member])
-        flat = np.array([int(self.run_of[member]) * self.WH + iy * self.W + ix])
-        zero = np.zeros(1, dtype=np.int64)
-        self._commit(Points(g, zero, np.array([tick], dtype=np.int64), flat))
+        flat = int(self.run_of[member]) * self.WH + iy * self.W + ix
+        self._commit(Points.single(g, tick, flat, self.dummy))
         if self.detects(member):
             return self.targets_in_view(member, ix, iy)
         return []
@@ -330,27 +336,24 @@ class World:
             np.minimum(ya, yb),
             np.maximum(ya, yb),
         )
-        piece, sa, n = piece[keep], sa[keep], cnt[keep]
-        total = int(n.sum())
-        if not total:
+        piece, sa, cnt = piece[keep], sa[keep], cnt[keep]
+        if not piece.size:
             return Points.empty()
         gm, s0, body = gm[piece], s0[piece], body[piece]
-        ox, oy, dx, dy = body[:, 0], body[:, 1], body[:, 2], body[:, 3]
-        first = np.cumsum(n) - n
-        # steps from the segment origin: sa .. sa + n - 1 per stretch
-        steps_i = np.arange(total, dtype=np.int64)
-        steps_i += np.repeat(sa - first, n)
-        tick = steps_i + np.repeat(s0, n)
-        steps = steps_i.astype(np.float64)
-        u = steps * np.repeat(dx, n)
-        u += np.repeat(ox, n)
-        w = steps * np.repeat(dy, n)
-        w += np.repeat(oy, n)
-        flat = w.astype(np.int64)  # in the grid: truncation is floor
+        # one row per stretch: steps sa .. sa + STRETCH - 1 from the segment origin (the same
+        # expression, step * heading + origin, as everywhere), `dummy` past the stretch's end
+        column = np.arange(STRETCH, dtype=np.float64)
+        steps = sa.astype(np.float64)[:, None] + column[None, :]
+        u = steps * body[:, 2, None]
+        u += body[:, 0, None]
+        w = steps * body[:, 3, None]
+        w += body[:, 1, None]
+        flat = w.astype(self._padded.dtype)  # in the grid: truncation is floor
         flat *= self.W
-        flat += u.astype(np.int64)
-        flat += np.repeat(self.run_of[gm] * self.WH, n)
-        return Points(gm, first, tick, flat)
+        flat += u.astype(self._padded.dtype)
+        flat += (self.run_of[gm] * self.WH).astype(self._padded.dtype)[:, None]
+        flat[column[None, :] >= cnt[:, None]] = self.dummy
+        return Points(gm, s0 + sa, flat.reshape(-1))
 
     def _snapshot(self, g: I64) -> list[NDArray[np.generic]]:
         return [a[g].copy() for a in self._state()]
@@ -396,7 +399,7 @@ class World:
                 if cut.any():  # replay those runs' members up to the find (same draws)
                     self._restore(movers, saved, cut)
                     self._pieces(movers[cut], now[runs[cut]], end[runs[cut]], False)
-                    points = points.until(end, self.WH)
+                    points = points.until(end, self.WH, self.dummy)
         self._commit(points)
         return end, finds
 
@@ -406,7 +409,7 @@ class World:
         if len(self.views) == 1:
             near = self.near[0][points.flat]
             return near
-        sight = np.repeat(self.sight[points.gm], np.diff(points.first, append=len(points)))
+        sight = np.repeat(self.sight[points.gm], STRETCH)
         near = self.near[sight, points.flat]
         return near
 
@@ -433,18 +436,16 @@ class World:
         if not new.size:
             return
         flat = points.flat[new]
-        np.minimum.at(self.first[k], flat, points.tick[new].astype(np.int32))
+        np.minimum.at(self.first[k], flat, points.ticks(new).astype(np.int32))
         # a patch passed twice brings the same view: `distinct` below drops the repeats
         stood[flat] = 1
-        # each point's predecessor in its piece stands with its whole view seen (now or
-        # before): only what the step adds can be new; a piece's first point brings its view
-        start = np.zeros(len(points), dtype=np.bool_)
-        start[points.first[points.first < len(points)]] = True
-        start[0] = True
+        # each point's predecessor in its row stands with its whole view seen (now or
+        # before): only what the step adds can be new; a row's first point brings its view
+        start = (new & (STRETCH - 1)) == 0
         around = entering(
             self._padded[flat],
-            self._padded[points.flat[new - 1]],  # new - 1 == -1 only at a start
-            start[new],
+            self._padded[points.flat[new - 1]],  # at a start: another row's, unused
+            start,
             self.geometry,
             self._view_offsets[k],
             self.views[k],
@@ -460,7 +461,7 @@ class World:
         it as far as the largest view sees (`Blocks` is conservative)."""
         x, y = int(self.tx[run, target]), int(self.ty[run, target])
         for k, v in enumerate(self.views):
-            grid = self.near[k].reshape(self.runs, self.H, self.W)
+            grid = self.near[k][: self.dummy].reshape(self.runs, self.H, self.W)
             rows = slice(max(0, y - v), min(self.H, y + v + 1))
             cols = slice(max(0, x - v), min(self.W, x + v + 1))
             grid[run, rows, cols] += delta
