@@ -41,9 +41,15 @@ class Blocks:
         block: I64 = (run * self.bh + y // SIZE) * self.bw + x // SIZE
         return block
 
-    def seen(self, padded: I64) -> None:
-        """Padded patches (flat, run included) were seen for the first time."""
-        self.change(self.of_padded[padded], -1)
+    def seen(self, padded: I64) -> NDArray[np.int64]:
+        """Padded patches (flat, run included, each once) were seen for the first time;
+        returns how many per run."""
+        count = np.bincount(self.of_padded[padded], minlength=len(self.dirty))
+        if padded.size:
+            self.dirty -= count
+            self._table = None
+        per_run: NDArray[np.int64] = count.reshape(self.runs, -1).sum(axis=1)
+        return per_run
 
     def change(self, blocks: NDArray[np.signedinteger], delta: int) -> None:
         """Add `delta` to the count of each block listed (a block may repeat)."""

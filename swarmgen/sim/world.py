@@ -32,11 +32,12 @@ leg whose view holds no unseen patch and no target are skipped without computing
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmgen.sim.blocks import Blocks, entering, padded_index
+from swarmgen.sim.blocks import Blocks, entering
 from swarmgen.sim.grid import (
     BLOCK,
     F64,
@@ -122,10 +123,14 @@ class World:
         on; which patches were seen (the flags are padded by the largest view so a view never
         needs bounds checks); patches seen per run."""
         runs, classes = self.runs, len(self.views)
-        self.first: NDArray[np.int32] = np.full((classes, runs * self.WH), INF, dtype=np.int32)
+        # every per-patch array is indexed in the padded grid (run included, `cell`), as the
+        # round's positions are; its padding is never stood on, seen from the start
+        self.first: NDArray[np.int32] = np.full((classes, runs * self.PWH), INF, dtype=np.int32)
         # patches stood on, and past them `dummy`: the index `Points` gives past a row's end,
         # always stood on (never new) and never near a target
-        self.dummy = runs * self.WH
+        self.dummy = runs * self.PWH
+        # the dtype of positions
+        self.index: np.dtype[Any] = np.dtype(np.int32 if self.dummy < 2**31 else np.int64)
         self.stood: NDArray[np.uint8] = np.zeros((classes, self.dummy + 1), dtype=np.uint8)
         self.stood[:, self.dummy] = 1
         seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
@@ -133,13 +138,10 @@ class World:
         self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
         self.covered: I64 = np.zeros(runs, dtype=np.int64)
         self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
-        # each patch's index in the padded grid, and `dummy`'s (0: any, it is never used)
-        index = padded_index(runs, self.geometry)
-        self._padded = np.concatenate([index, np.zeros(1, dtype=index.dtype)])
         self._view_offsets = []  # per sight class: its view around a patch, in the padded grid
         for v in self.views:
             oy_, ox_ = np.divmod(np.arange((2 * v + 1) ** 2, dtype=np.int64), 2 * v + 1)
-            offsets = ((oy_ - v) * self.PW + (ox_ - v)).astype(self._padded.dtype)
+            offsets = ((oy_ - v) * self.PW + (ox_ - v)).astype(self.index)
             self._view_offsets.append(offsets)
 
     def _init_targets(self, targets: I64) -> None:
@@ -163,6 +165,18 @@ class World:
                 self._near_add(run, target, 1)
 
     # --- geometry
+
+    def cell(self, run: I64 | int, ix: int, iy: int) -> I64:
+        """The flat index of patch (ix, iy) of runs in the padded grids."""
+        cell: I64 = (np.asarray(run, dtype=np.int64) * self.PH + iy + self.v) * self.PW
+        cell += ix + self.v
+        return cell
+
+    def patch(self, cell: int) -> tuple[int, int, int]:
+        """The run and patch (ix, iy) of a flat index in the padded grids."""
+        run, rest = divmod(cell, self.PWH)
+        iy, ix = divmod(rest, self.PW)
+        return run, ix - self.v, iy - self.v
 
     def _inside(self, u: F64, w: F64) -> Bool:
         return (u >= 0) & (u < self.W) & (w >= 0) & (w < self.H)
@@ -224,8 +238,8 @@ class World:
             self._longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g])[0]
         )
         ix, iy = int(self.ox[member]), int(self.oy[member])
-        flat = int(self.run_of[member]) * self.WH + iy * self.W + ix
-        self._commit(Points.single(g, tick, flat, self.dummy))
+        cell = int(self.cell(int(self.run_of[member]), ix, iy))
+        self._commit(Points.single(g, tick, cell, self.dummy))
         if self.detects(member):
             return self.targets_in_view(member, ix, iy)
         return []
@@ -348,10 +362,10 @@ class World:
         u += body[:, 0, None]
         w = steps * body[:, 3, None]
         w += body[:, 1, None]
-        flat = w.astype(self._padded.dtype)  # in the grid: truncation is floor
-        flat *= self.W
-        flat += u.astype(self._padded.dtype)
-        flat += (self.run_of[gm] * self.WH).astype(self._padded.dtype)[:, None]
+        flat: NDArray[np.signedinteger] = w.astype(self.index)  # in the grid: floor
+        flat *= self.PW
+        flat += u.astype(self.index)
+        flat += self.cell(self.run_of[gm], 0, 0).astype(self.index)[:, None]
         flat[column[None, :] >= cnt[:, None]] = self.dummy
         return Points(gm, s0 + sa, flat.reshape(-1))
 
@@ -387,19 +401,18 @@ class World:
             hit = np.flatnonzero(self._near_points(points) > 0)
             hit = hit[watch[points.members(hit)]]
             if hit.size:
-                hit_runs = points.flat[hit] // self.WH
+                hit_runs = points.flat[hit] // self.PWH
                 hit_ticks = points.ticks(hit)
                 np.minimum.at(end, hit_runs, hit_ticks)
                 at = hit[hit_ticks == end[hit_runs]]
                 for i in at[np.argsort(points.members(at), kind="stable")]:
-                    run, rest = divmod(int(points.flat[i]), self.WH)
-                    iy, ix = divmod(rest, self.W)
+                    run, ix, iy = self.patch(int(points.flat[i]))
                     finds.append((run, int(points.members(np.array([i]))[0]), ix, iy))
                 cut = end[runs] < horizon[runs]
                 if cut.any():  # replay those runs' members up to the find (same draws)
                     self._restore(movers, saved, cut)
                     self._pieces(movers[cut], now[runs[cut]], end[runs[cut]], False)
-                    points = points.until(end, self.WH, self.dummy)
+                    points = points.until(end, self.PWH, self.dummy)
         self._commit(points)
         return end, finds
 
@@ -443,8 +456,8 @@ class World:
         # before): only what the step adds can be new; a row's first point brings its view
         start = (new & (STRETCH - 1)) == 0
         around = entering(
-            self._padded[flat],
-            self._padded[points.flat[new - 1]],  # at a start: another row's, unused
+            flat,
+            points.flat[new - 1],  # at a start: another row's, unused
             start,
             self.geometry,
             self._view_offsets[k],
@@ -453,17 +466,16 @@ class World:
         around = around[self.seen_flag[around] == 0]
         fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh] = 1
-        self.covered += np.bincount(fresh // self.PWH, minlength=self.runs)
-        self.blocks.seen(fresh)
+        self.covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own
 
     def _near_add(self, run: int, target: int, delta: int) -> None:
         """A target enters (1) or leaves (-1) the views: every class's, and the blocks around
         it as far as the largest view sees (`Blocks` is conservative)."""
         x, y = int(self.tx[run, target]), int(self.ty[run, target])
         for k, v in enumerate(self.views):
-            grid = self.near[k][: self.dummy].reshape(self.runs, self.H, self.W)
-            rows = slice(max(0, y - v), min(self.H, y + v + 1))
-            cols = slice(max(0, x - v), min(self.W, x + v + 1))
+            grid = self.near[k][: self.dummy].reshape(self.runs, self.PH, self.PW)
+            rows = slice(max(0, y - v) + self.v, min(self.H, y + v + 1) + self.v)
+            cols = slice(max(0, x - v) + self.v, min(self.W, x + v + 1) + self.v)
             grid[run, rows, cols] += delta
         v = self.v  # the largest view
         rows = slice(max(0, y - v), min(self.H, y + v + 1))
@@ -523,10 +535,8 @@ class World:
         minimum, over the sight classes, of their `first` over their view around each patch."""
         seen = np.full((self.H, self.W), INF, dtype=np.int32)
         for k, v in enumerate(self.views):
-            first = self.first[k].reshape(self.runs, self.H, self.W)[run]
-            padded = np.full((self.H + 2 * v, self.W + 2 * v), INF, dtype=np.int32)
-            padded[v : v + self.H, v : v + self.W] = first
-            for oy in range(2 * v + 1):
-                for ox in range(2 * v + 1):
-                    np.minimum(seen, padded[oy : oy + self.H, ox : ox + self.W], out=seen)
+            first = self.first[k].reshape(self.runs, self.PH, self.PW)[run]  # padding: INF
+            for oy in range(self.v - v, self.v + v + 1):
+                for ox in range(self.v - v, self.v + v + 1):
+                    np.minimum(seen, first[oy : oy + self.H, ox : ox + self.W], out=seen)
         return seen
