@@ -131,7 +131,8 @@ def entering(
     the view around `now` less the view around `before`, whose patches are all seen already (a
     patch is stood on only with its whole view). Where `full` or the step is not to a
     neighbour, the whole view. A one-patch step adds one column and/or one row of the view, so
-    this is 3 to 5 patches instead of 9 (the corner may repeat: callers drop repeats).
+    this is 3 to 5 patches instead of 9, each once (a diagonal step's row leaves out the
+    corner its column holds); repeats across points are the callers' to drop.
     `view`: the stepping members' view radius when it is less than the padding's
     (`geometry.view`, the largest); `view_offsets` are then that view's."""
     pw = geometry.width + 2 * geometry.view
@@ -144,11 +145,15 @@ def entering(
     full = full | (np.abs(dx) > 1) | (np.abs(dy) > 1)
     cols = ~full & (dx != 0)
     rows = ~full & (dy != 0)
+    straight, corner = rows & (dx == 0), rows & (dx != 0)
     span = np.arange(-v, v + 1, dtype=now.dtype)
+    # a diagonal step's row: the span less the corner at dx * v (-v .. v-1, or -v+1 .. v)
+    shifted = now[corner] + dy[corner] * (v * pw) + (dx[corner] < 0)
     return np.concatenate(
         [
             (now[full][:, None] + view_offsets[None, :]).reshape(-1),
             ((now[cols] + dx[cols] * v)[:, None] + (span * pw)[None, :]).reshape(-1),
-            ((now[rows] + dy[rows] * (v * pw))[:, None] + span[None, :]).reshape(-1),
+            ((now[straight] + dy[straight] * (v * pw))[:, None] + span[None, :]).reshape(-1),
+            (shifted[:, None] + span[None, :-1]).reshape(-1),
         ]
     )

@@ -76,24 +76,26 @@ class Points:
     """Patches passed in one round, stretch by stretch (a row: `STRETCH` consecutive steps of
     one member along a straight leg): the flat patch index (run included) of each step, rows
     end to end, and `dummy` (a patch index past every run's, never new, never near a target)
-    after a row's last step. Step j of row i is passed at tick `base[i] + j`."""
+    after a row's last step. Step j of row i is passed at tick `base[i] + j`; `linked[i]`: the
+    row before it holds the steps just before its first (the same leg, a full row)."""
 
     gm: I64  # member of each row
     base: I64  # tick of each row's first step
     flat: NDArray[np.signedinteger]  # (rows * STRETCH,)
+    linked: Bool
 
     @staticmethod
     def empty() -> Points:
         """No points."""
         e = np.zeros(0, dtype=np.int64)
-        return Points(e, e, e)
+        return Points(e, e, e, e.astype(np.bool_))
 
     @staticmethod
     def single(g: I64, tick: int, flat: int, dummy: int) -> Points:
         """One member standing on one patch at a tick."""
         row = np.full(STRETCH, dummy, dtype=np.int64)
         row[0] = flat
-        return Points(g, np.array([tick], dtype=np.int64), row)
+        return Points(g, np.array([tick], dtype=np.int64), row, np.zeros(1, dtype=np.bool_))
 
     def __len__(self) -> int:
         return len(self.flat)
@@ -109,13 +111,13 @@ class Points:
         return members
 
     def select(self, rows: Bool) -> Points:
-        """The rows flagged (in their order)."""
+        """The rows flagged (in their order): whole members' rows, so links hold."""
         steps = self.flat.reshape(-1, STRETCH)[rows].reshape(-1)
-        return Points(self.gm[rows], self.base[rows], steps)
+        return Points(self.gm[rows], self.base[rows], steps, self.linked[rows])
 
     def until(self, end: I64, cells: int, dummy: int) -> Points:
         """The points at or before each run's end tick (the others become `dummy`)."""
         ticks = self.base[:, None] + np.arange(STRETCH)[None, :]
         flat = self.flat.reshape(-1, STRETCH)
         late = ticks > end[np.minimum(flat, dummy - 1) // cells]
-        return Points(self.gm, self.base, np.where(late, dummy, flat).reshape(-1))
+        return Points(self.gm, self.base, np.where(late, dummy, flat).reshape(-1), self.linked)

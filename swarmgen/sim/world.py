@@ -45,6 +45,7 @@ from swarmgen.sim.grid import (
     I64,
     INF,
     MEMBER_KEY,
+    SHIFT,
     STRETCH,
     U64,
     Bool,
@@ -353,6 +354,9 @@ class World:
         piece, sa, cnt = piece[keep], sa[keep], cnt[keep]
         if not piece.size:
             return Points.empty()
+        # a row whose leg's previous stretch is the row before it (kept, so full and adjacent)
+        linked = np.zeros(len(piece), dtype=np.bool_)
+        linked[1:] = (piece[1:] == piece[:-1]) & (sa[1:] == sa[:-1] + STRETCH)
         gm, s0, body = gm[piece], s0[piece], body[piece]
         # one row per stretch: steps sa .. sa + STRETCH - 1 from the segment origin (the same
         # expression, step * heading + origin, as everywhere), `dummy` past the stretch's end
@@ -367,7 +371,7 @@ class World:
         flat += u.astype(self.index)
         flat += self.cell(self.run_of[gm], 0, 0).astype(self.index)[:, None]
         flat[column[None, :] >= cnt[:, None]] = self.dummy
-        return Points(gm, s0 + sa, flat.reshape(-1))
+        return Points(gm, s0 + sa, flat.reshape(-1), linked)
 
     def _snapshot(self, g: I64) -> list[NDArray[np.generic]]:
         return [a[g].copy() for a in self._state()]
@@ -452,9 +456,11 @@ class World:
         np.minimum.at(self.first[k], flat, points.ticks(new).astype(np.int32))
         # a patch passed twice brings the same view: `distinct` below drops the repeats
         stood[flat] = 1
-        # each point's predecessor in its row stands with its whole view seen (now or
-        # before): only what the step adds can be new; a row's first point brings its view
+        # each point's predecessor stands with its whole view seen (now or before): only what
+        # the step adds can be new; a row's first point brings its view, unless the row before
+        # it is its leg's previous stretch (the predecessor is then that row's last point)
         start = (new & (STRETCH - 1)) == 0
+        start[start] = ~points.linked[new[start] >> SHIFT]
         around = entering(
             flat,
             points.flat[new - 1],  # at a start: another row's, unused
