@@ -216,11 +216,15 @@ def make_sampler(
 
 
 def storage_of(url: str) -> Any:
-    """optuna's RDB storage at `url` (any SQLAlchemy URL), with heartbeats for shared ones."""
+    """optuna's RDB storage at `url` (any SQLAlchemy URL), with heartbeats for shared ones
+    (an in-memory SQLite database is this process's alone, and a heartbeat thread would get an
+    empty database of its own)."""
     import optuna
     from sqlalchemy.exc import SQLAlchemyError
 
     try:
+        if url == "sqlite:///:memory:":
+            return optuna.storages.RDBStorage(url)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             retry = optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=1)
