@@ -54,11 +54,12 @@ from swarmgen.sim.grid import (
     distinct,
     mix64,
 )
+from swarmgen.sim.targets import CLAIMED, FOUND, RESCUED, UNFOUND, Targets
 
-UNFOUND, FOUND, CLAIMED, RESCUED = 0, 1, 2, 3  # target status
+__all__ = ["CLAIMED", "FOUND", "RESCUED", "UNFOUND", "World"]
 
 
-class World:
+class World(Targets):
     """Bodies, coverage and targets of `runs` repetitions; see the module docstring."""
 
     def __init__(
@@ -144,26 +145,6 @@ class World:
             oy_, ox_ = np.divmod(np.arange((2 * v + 1) ** 2, dtype=np.int64), 2 * v + 1)
             offsets = ((oy_ - v) * self.PW + (ox_ - v)).astype(self.index)
             self._view_offsets.append(offsets)
-
-    def _init_targets(self, targets: I64) -> None:
-        """Where the targets are, their status and the ticks of what happened to them."""
-        runs = self.runs
-        targets = np.asarray(targets, dtype=np.int64).reshape(runs, -1, 2)
-        self.tx: I64 = targets[:, :, 0].copy()
-        self.ty: I64 = targets[:, :, 1].copy()
-        shape = self.tx.shape
-        self.status: NDArray[np.int8] = np.zeros(shape, dtype=np.int8)
-        self.finder: I64 = np.full(shape, -1, dtype=np.int64)
-        self.found_tick: I64 = np.full(shape, -1, dtype=np.int64)  # first find taken up
-        self.reported_tick: I64 = np.full(shape, -1, dtype=np.int64)  # latest targetFound
-        self.rescued_tick: I64 = np.full(shape, -1, dtype=np.int64)
-        self.unfound: I64 = np.full(runs, shape[1], dtype=np.int64)
-        self.fresh: list[list[int]] = [[] for _ in range(runs)]  # reported this tick
-        # near[k, c] > 0: an unfound target is in the view of sight class k from patch c
-        self.near: NDArray[np.int16] = np.zeros((len(self.views), self.dummy + 1), dtype=np.int16)
-        for run in range(runs):
-            for target in range(shape[1]):
-                self._near_add(run, target, 1)
 
     # --- geometry
 
@@ -473,68 +454,6 @@ class World:
         fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh] = 1
         self.covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own
-
-    def _near_add(self, run: int, target: int, delta: int) -> None:
-        """A target enters (1) or leaves (-1) the views: every class's, and the blocks around
-        it as far as the largest view sees (`Blocks` is conservative)."""
-        x, y = int(self.tx[run, target]), int(self.ty[run, target])
-        for k, v in enumerate(self.views):
-            grid = self.near[k][: self.dummy].reshape(self.runs, self.PH, self.PW)
-            rows = slice(max(0, y - v) + self.v, min(self.H, y + v + 1) + self.v)
-            cols = slice(max(0, x - v) + self.v, min(self.W, x + v + 1) + self.v)
-            grid[run, rows, cols] += delta
-        v = self.v  # the largest view
-        rows = slice(max(0, y - v), min(self.H, y + v + 1))
-        cols = slice(max(0, x - v), min(self.W, x + v + 1))
-        ys, xs = np.mgrid[rows, cols]
-        self.blocks.change(self.blocks.block_of(run, xs.ravel(), ys.ravel()), delta)
-
-    def targets_in_view(self, member: int, ix: int, iy: int) -> list[int]:
-        """The unfound targets of the member's run within view of patch (ix, iy)."""
-        run, v = int(self.run_of[member]), self.views[int(self.sight[member])]
-        near = (
-            (np.abs(self.tx[run] - ix) <= v)
-            & (np.abs(self.ty[run] - iy) <= v)
-            & (self.status[run] == UNFOUND)
-        )
-        return [int(t) for t in np.flatnonzero(near)]
-
-    def report(self, run: int, target: int, member: int, tick: int) -> None:
-        """A member reported a target (targetFound): nobody else will find it now."""
-        if self.status[run, target] == UNFOUND:
-            self._near_add(run, target, -1)
-            self.unfound[run] -= 1
-        self.status[run, target] = FOUND
-        self.finder[run, target] = member
-        self.reported_tick[run, target] = tick
-        self.fresh[run].append(target)
-
-    def claim(self, run: int, target: int) -> None:
-        """The finder took the find up (a behaviour of it started on this target)."""
-        if self.status[run, target] == FOUND:
-            self.status[run, target] = CLAIMED
-            if self.found_tick[run, target] < 0:
-                self.found_tick[run, target] = self.reported_tick[run, target]
-
-    def forget(self, run: int, target: int) -> None:
-        """A find nobody took up: the target can be found again."""
-        if self.status[run, target] in (FOUND, CLAIMED):
-            self.status[run, target] = UNFOUND
-            self.finder[run, target] = -1
-            self._near_add(run, target, 1)
-            self.unfound[run] += 1
-
-    def rescue(self, run: int, target: int, tick: int) -> None:
-        """A target was rescued at `tick` (found then, at the latest)."""
-        if self.status[run, target] == RESCUED:
-            return
-        if self.status[run, target] == UNFOUND:
-            self._near_add(run, target, -1)
-            self.unfound[run] -= 1
-        if self.found_tick[run, target] < 0:
-            self.found_tick[run, target] = max(self.reported_tick[run, target], tick)
-        self.status[run, target] = RESCUED
-        self.rescued_tick[run, target] = tick
 
     def seen_times(self, run: int) -> NDArray[np.int32]:
         """When each patch of a run was first seen (INF: never), as a (height, width) grid: the
