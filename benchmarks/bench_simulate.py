@@ -13,6 +13,13 @@ in one run on this machine:
   peak memory (ru_maxrss) is reported.
 
     .venv/bin/python benchmarks/bench_simulate.py [--mesa-reps 50] [--skip-mesa] [--skip-scale]
+        [--against TREE [--pairs 7] [--against-name TEXT]]
+
+`--against TREE` (a checkout of another commit, e.g. `git worktree add /tmp/base HEAD~3` or
+`git archive HEAD~3 | tar -x -C /tmp/base`) also times the 200 runs side by side: each pair is a
+fresh process on TREE then one on this tree, alternating, with 2 workers and then with 1; the
+report keeps every pair's wall and CPU seconds (the process and its workers) and their medians,
+so a loaded machine shows as noise in both columns alike.
 
 Needs `mesa` (pip install -e '.[bench]'). Writes benchmarks/results/simulate.json.
 """
@@ -93,6 +100,71 @@ def cli_seconds(workers: int) -> float:
         stderr=subprocess.DEVNULL,
     )
     return time.perf_counter() - started
+
+
+# --- side by side with another tree -----------------------------------------------------------
+
+# a fresh process that imports swarmgen from the tree given (not the installed one: an editable
+# install's finder is dropped first) and prints the 200 runs' wall and CPU seconds
+_PAIR = """
+import json, resource, sys, time
+sys.meta_path[:] = [f for f in sys.meta_path if "editable" not in repr(f).lower()]
+sys.path.insert(0, sys.argv[1])
+from pathlib import Path
+from swarmgen.sim import scenario as sc
+from swarmgen.sim.machines import compile_machines
+from swarmgen.sim.sweep import simulate
+import swarmgen
+assert swarmgen.__file__.startswith(sys.argv[1]), swarmgen.__file__
+def cpu():
+    a, b = (resource.getrusage(w) for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
+    return a.ru_utime + a.ru_stime + b.ru_utime + b.ru_stime
+machines = compile_machines(Path(sys.argv[2]))
+scenario = sc.load("coverage").with_overrides({"UAV": [1, 2, 4, 8]}, reps=50)
+c, w = cpu(), time.perf_counter()
+simulate(machines, scenario, workers=int(sys.argv[3]))
+print(json.dumps([time.perf_counter() - w, cpu() - c]))
+"""
+
+
+def tree_seconds(tree: Path, workers: int) -> tuple[float, float]:
+    """Wall and CPU seconds of the 200 runs in a fresh process on `tree`."""
+    out = subprocess.run(
+        [sys.executable, "-c", _PAIR, str(tree), str(MODEL), str(workers)],
+        check=True, capture_output=True, text=True, cwd=tree,
+    )  # fmt: skip
+    wall, cpu = json.loads(out.stdout.strip().splitlines()[-1])
+    return wall, cpu
+
+
+def side_by_side(before: Path, pairs: int) -> dict[str, Any]:
+    """`pairs` alternating runs of the tree `before` and of this one, with 2 and 1 workers."""
+    report: dict[str, Any] = {"before": _describe(before), "after": _describe(ROOT)}
+    for workers in (2, 1):
+        rows = []
+        for _ in range(pairs):
+            rows.append([*tree_seconds(before, workers), *tree_seconds(ROOT, workers)])
+            print(f"pair ({workers} worker(s)): before {rows[-1][:2]}, after {rows[-1][2:]}")
+        columns = list(zip(*rows, strict=True))
+        report[f"workers_{workers}"] = {
+            "pairs_wall_cpu_before_after": [[round(x, 3) for x in r] for r in rows],
+            "median_wall_before": round(statistics.median(columns[0]), 3),
+            "median_cpu_before": round(statistics.median(columns[1]), 3),
+            "median_wall_after": round(statistics.median(columns[2]), 3),
+            "median_cpu_after": round(statistics.median(columns[3]), 3),
+            "median_cpu_ratio_after_over_before": round(
+                statistics.median(r[3] / r[1] for r in rows), 3
+            ),
+        }
+    return report
+
+
+def _describe(tree: Path) -> str:
+    """The tree's commit (or its path, when it is not a git checkout)."""
+    found = subprocess.run(
+        ["git", "-C", str(tree), "log", "-1", "--format=%h %s"], capture_output=True, text=True
+    )
+    return found.stdout.strip()[:100] if found.returncode == 0 else str(tree)
 
 
 # --- Mesa reference ---------------------------------------------------------------------------
@@ -233,6 +305,9 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="timed repeats of swarmgen")
     parser.add_argument("--skip-mesa", action="store_true")
     parser.add_argument("--skip-scale", action="store_true")
+    parser.add_argument("--against", type=Path, help="another tree to time side by side")
+    parser.add_argument("--pairs", type=int, default=7, help="side-by-side pairs per setting")
+    parser.add_argument("--against-name", help="what --against is (default: its git commit)")
     args = parser.parse_args()
     runs = len(SIZES) * args.reps
     report: dict[str, Any] = {
@@ -277,6 +352,10 @@ def main() -> None:
         "x_netlogo": round(NETLOGO_SECONDS / best, 1),
         "mean_ticks_to_levels": {str(n): [round(v, 1) for v in means[n]] for n in SIZES},
     }
+    if args.against is not None:
+        report["side_by_side"] = side_by_side(args.against.resolve(), args.pairs)
+        if args.against_name:
+            report["side_by_side"]["before"] = args.against_name
     if not args.skip_mesa:
         mesa_seconds, mesa_cpu, mesa_means = mesa_runs(args.mesa_reps, 2)
         mesa_total = len(SIZES) * args.mesa_reps

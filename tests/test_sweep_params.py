@@ -7,6 +7,7 @@ import csv
 import io
 import json
 import statistics
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -14,8 +15,10 @@ from click.testing import CliRunner
 
 from swarmgen import pipeline
 from swarmgen.cli import main
-from swarmgen.sim import params
+from swarmgen.sim import params, sweep
 from swarmgen.sim import scenario as sc
+from swarmgen.sim.batch import RunResult
+from swarmgen.sim.machines import compile_machines
 from tests.conftest import SAMPLE_MODELS
 from tests.modelkit import ModelKit
 
@@ -151,8 +154,13 @@ def test_points_apply_to_the_scenario(sar_names: params.Names) -> None:
         ("UAV.cuont=1", "unknown parameter UAV.cuont; did you mean UAV.count?"),
         ("world.veiw=1", "did you mean world.view?"),
         ("wind=1", "unknown parameter wind"),
-        ("UAV.camera.fovRadius=1,2", "does not read hardware parameters"),
-        ("UGV.drive.maxSpeed=1", "does not read hardware parameters"),
+        ("UAV.camera.fovRadus=1", "did you mean UAV.camera.fovRadius?"),
+        ("UAV.camera.fovRadius=wide", "UAV.camera.fovRadius: expected a Real"),
+        ("UAV.camera.fovRadius=-0.5", "expected a radius >= 0"),
+        ("UAV.camera.fovRadius=0.5,9", "a view of 27 patches (9 m over patches of 0.328358 m"),
+        ("UGV.frontCamera.fovRadius=1", "no behaviour of the UGV machine covers or monitors"),
+        ("UGV.drive.maxSpeed=1", "a hardware parameter the abstract simulator does not read"),
+        ("UAV.camera.frameRate=10", "it reads a camera's fovRadius"),
         ("UAV.data.maxSpeed=1", "no guard, effect or behaviour input of the UAV machine reads"),
         ("world.view=abc", 'world.view="abc": $.world.view: expected an integer'),
         ("world.view=1.5", "expected an integer from 0 to 16"),
@@ -225,6 +233,31 @@ def test_view_changes_the_runs_and_is_a_column(tmp_path: Path) -> None:
     assert (out / "coverage.png").stat().st_size > 0
     svg = (out / "coverage.svg").read_text()  # one panel per point, titled with it
     assert "world.view=1, world.width=41" in svg and "world.view=3, world.width=41" in svg
+
+
+def test_a_camera_radius_is_the_view_it_maps_to(sar_names: params.Names) -> None:
+    """`UAV.camera.fovRadius` r sets the UAVs' view to floor(r / patch_m) patches (patches of
+    0.5 m here, the scenario's `detailed.patch_m`): the runs, finds and rescues included, are
+    those of `world.view` swept to the same views. The UGVs keep `world.view` (1): the camera
+    points run a world of two sight classes, the view points one."""
+    base = replace(
+        sc.load("sar"), width=25, height=25, members={"UAV": [2], "UGV": "=UAV"}, targets=[2],
+        reps=3, seed=6, detailed={"patch_m": 0.5},
+    )  # fmt: skip
+    radii = [(("UAV.camera.fovRadius", r),) for r in (0.3, 1.2)]
+    by_camera = params.variants(base, radii, sar_names, "--param")
+    by_view = params.variants(base, [(("world.view", v),) for v in (0, 2)], sar_names, "--param")
+    assert [v.scenario.views for v in by_camera] == [{"UAV": 0}, {"UAV": 2}]
+    assert by_camera[1].columns() == (("UAV.camera.fovRadius", 1.2),)
+    machines = compile_machines(SAR)
+
+    def runs(variants: list[params.Variant]) -> list[RunResult]:
+        points = [(machines, v.scenario, v.columns()) for v in variants]
+        return sweep.simulate(machines, base, points=points).runs
+
+    camera, view = runs(by_camera), runs(by_view)
+    assert camera == view and camera[0] != camera[3]
+    assert all(r.reason == "rescued" for r in camera), camera
 
 
 def test_targets_change_the_runs(tmp_path: Path) -> None:

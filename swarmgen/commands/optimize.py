@@ -43,6 +43,9 @@ STUDY_DB = "study.db"  # the default SQLite database, in the output directory
               "seed gives the same study.")  # fmt: skip
 @click.option("--trials", type=click.IntRange(1, 100_000), default=20, show_default=True,
               help="Finished trials the study should have (a resumed study runs the rest).")  # fmt: skip
+@click.option("--parallel", type=click.IntRange(1, 256), default=1, show_default=True,
+              help="Trials in flight at once: asked together, their runs one sweep through the "
+              "executor (the study then depends on the seed and this number).")  # fmt: skip
 @click.option(
     "--sampler", type=click.Choice(["tpe", "cmaes", "nsga2"]), default=None,
     help="tpe (default, one objective), cmaes (one objective) or nsga2 (default for two).",
@@ -57,7 +60,8 @@ STUDY_DB = "study.db"  # the default SQLite database, in the output directory
 @guarded
 def optimize(
     model: Path, space: tuple[str, ...], objective: tuple[str, ...], scenario: str,
-    reps: int | None, seed: int | None, trials: int, sampler: str | None, storage: str | None,
+    reps: int | None, seed: int | None, trials: int, parallel: int, sampler: str | None,
+    storage: str | None,
     study_name: str, cluster: str | None, output: Path,
 ) -> None:  # fmt: skip
     """Search MODEL's parameters for the best value of the objectives over simulated runs."""
@@ -79,7 +83,7 @@ def optimize(
         executor = connect(cluster)
     spec.executor = executor
     try:
-        study = opt.run_study(spec, url, study_name, chosen_sampler, seed, trials)
+        study = opt.run_study(spec, url, study_name, chosen_sampler, seed, trials, parallel)
     finally:
         if executor is not None:
             executor.close()

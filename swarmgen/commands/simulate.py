@@ -47,7 +47,8 @@ if TYPE_CHECKING:
 @click.option(
     "--param", "param", multiple=True, metavar="NAME=V1,V2,...|NAME=START:STOP:STEP",
     help="Sweep a parameter (repeatable; every combination): UAV.count, UAV.data.NAME, targets, "
-    "seed, world.view, timing.KEY, placement.TYPE.spacing, ...; see docs/simulate.md.",
+    "seed, world.view, UAV.camera.fovRadius, timing.KEY, placement.TYPE.spacing, ...; see "
+    "docs/simulate.md.",
 )  # fmt: skip
 @click.option(
     "--sweep", "sweep_file", type=PATH,

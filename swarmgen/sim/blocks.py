@@ -13,13 +13,14 @@ never changes a number; it only saves the work of patches that cannot matter.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numpy.typing import NDArray
 
 from swarmgen.sim.grid import I64, Geometry
 
 SIZE = 8  # patches per block side
-STRETCH = 16  # steps per stretch tested against the index
 
 
 class Blocks:
@@ -31,30 +32,24 @@ class Blocks:
         self.runs = runs
         self.bw = -(-self.W // SIZE)
         self.bh = -(-self.H // SIZE)
-        xs = np.bincount(np.arange(self.W) // SIZE, minlength=self.bw)
-        ys = np.bincount(np.arange(self.H) // SIZE, minlength=self.bh)
-        per_run = (ys[:, None] * xs[None, :]).astype(np.int64).reshape(-1)
-        self.dirty: I64 = np.tile(per_run, runs)  # (runs * bh * bw,)
+        start, self.of_padded = _layout(runs, geometry)
+        self.dirty: I64 = start.copy()  # (runs * bh * bw,)
         self._table: NDArray[np.int64] | None = None
-        # the block of each padded patch (the padding takes its nearest patch's): one look-up
-        # per newly seen patch instead of two divisions
-        ph, pw = self.H + 2 * self.v, self.W + 2 * self.v
-        dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
-        by = np.clip(np.arange(ph) - self.v, 0, self.H - 1) // SIZE
-        bx = np.clip(np.arange(pw) - self.v, 0, self.W - 1) // SIZE
-        lut = ((np.arange(runs)[:, None] * self.bh + by[None, :]) * self.bw).astype(dtype)
-        self.of_padded: NDArray[np.signedinteger] = np.add(
-            lut[:, :, None], bx.astype(dtype)[None, None, :]
-        ).ravel()
 
     def block_of(self, run: I64 | int, x: I64, y: I64) -> I64:
         """The flat block index of patches (x, y) of runs `run`."""
         block: I64 = (run * self.bh + y // SIZE) * self.bw + x // SIZE
         return block
 
-    def seen(self, padded: I64) -> None:
-        """Padded patches (flat, run included) were seen for the first time."""
-        self.change(self.of_padded[padded], -1)
+    def seen(self, padded: I64) -> NDArray[np.int64]:
+        """Padded patches (flat, run included, each once) were seen for the first time;
+        returns how many per run."""
+        count = np.bincount(self.of_padded[padded], minlength=len(self.dirty))
+        if padded.size:
+            self.dirty -= count
+            self._table = None
+        per_run: NDArray[np.int64] = count.reshape(self.runs, -1).sum(axis=1)
+        return per_run
 
     def change(self, blocks: NDArray[np.signedinteger], delta: int) -> None:
         """Add `delta` to the count of each block listed (a block may repeat)."""
@@ -87,16 +82,41 @@ class Blocks:
         return touched
 
 
+@functools.lru_cache(maxsize=4)
+def _layout(runs: int, geometry: Geometry) -> tuple[I64, NDArray[np.signedinteger]]:
+    """The blocks' starting counts (every patch unseen), and the block of each padded patch
+    (the padding takes its nearest patch's: one look-up per newly seen patch instead of two
+    divisions). Shared, read-only, by the batches of one process with the same grid."""
+    w, h, v = geometry.width, geometry.height, geometry.view
+    bw, bh = -(-w // SIZE), -(-h // SIZE)
+    xs = np.bincount(np.arange(w) // SIZE, minlength=bw)
+    ys = np.bincount(np.arange(h) // SIZE, minlength=bh)
+    per_run = (ys[:, None] * xs[None, :]).astype(np.int64).reshape(-1)
+    ph, pw = h + 2 * v, w + 2 * v
+    dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
+    by = np.clip(np.arange(ph) - v, 0, h - 1) // SIZE
+    bx = np.clip(np.arange(pw) - v, 0, w - 1) // SIZE
+    lut = ((np.arange(runs)[:, None] * bh + by[None, :]) * bw).astype(dtype)
+    of_padded = np.add(lut[:, :, None], bx.astype(dtype)[None, None, :]).ravel()
+    start = np.tile(per_run, runs)
+    for array in (start, of_padded):
+        array.setflags(write=False)
+    return start, of_padded
+
+
+@functools.lru_cache(maxsize=4)
 def padded_index(runs: int, geometry: Geometry) -> NDArray[np.signedinteger]:
-    """For each patch (flat, run included) its flat index in the grid padded by `view`."""
+    """For each patch (flat, run included) its flat index in the grid padded by `view`
+    (shared, read-only, by the batches of one process with the same grid)."""
     v, w, h = geometry.view, geometry.width, geometry.height
     ph, pw = h + 2 * v, w + 2 * v
     dtype = np.int32 if runs * ph * pw < 2**31 else np.int64
     rows = ((np.arange(runs)[:, None] * ph + np.arange(h)[None, :] + v) * pw + v).astype(dtype)
     index: NDArray[np.signedinteger] = np.add(
         rows[:, :, None], np.arange(w, dtype=dtype)[None, None, :]
-    )
-    return index.ravel()
+    ).ravel()
+    index.setflags(write=False)
+    return index
 
 
 def entering(
@@ -105,13 +125,18 @@ def entering(
     full: NDArray[np.bool_],
     geometry: Geometry,
     view_offsets: NDArray[np.signedinteger],
+    view: int | None = None,
 ) -> NDArray[np.signedinteger]:
     """The padded patches a step from `before` to `now` (padded flat indices) brings into view:
     the view around `now` less the view around `before`, whose patches are all seen already (a
     patch is stood on only with its whole view). Where `full` or the step is not to a
     neighbour, the whole view. A one-patch step adds one column and/or one row of the view, so
-    this is 3 to 5 patches instead of 9 (the corner may repeat: callers drop repeats)."""
-    v, pw = geometry.view, geometry.width + 2 * geometry.view
+    this is 3 to 5 patches instead of 9, each once (a diagonal step's row leaves out the
+    corner its column holds); repeats across points are the callers' to drop.
+    `view`: the stepping members' view radius when it is less than the padding's
+    (`geometry.view`, the largest); `view_offsets` are then that view's."""
+    pw = geometry.width + 2 * geometry.view
+    v = geometry.view if view is None else view
     if v == 0:
         return now
     delta = now - before
@@ -120,11 +145,15 @@ def entering(
     full = full | (np.abs(dx) > 1) | (np.abs(dy) > 1)
     cols = ~full & (dx != 0)
     rows = ~full & (dy != 0)
+    straight, corner = rows & (dx == 0), rows & (dx != 0)
     span = np.arange(-v, v + 1, dtype=now.dtype)
+    # a diagonal step's row: the span less the corner at dx * v (-v .. v-1, or -v+1 .. v)
+    shifted = now[corner] + dy[corner] * (v * pw) + (dx[corner] < 0)
     return np.concatenate(
         [
             (now[full][:, None] + view_offsets[None, :]).reshape(-1),
             ((now[cols] + dx[cols] * v)[:, None] + (span * pw)[None, :]).reshape(-1),
-            ((now[rows] + dy[rows] * (v * pw))[:, None] + span[None, :]).reshape(-1),
+            ((now[straight] + dy[straight] * (v * pw))[:, None] + span[None, :]).reshape(-1),
+            (shifted[:, None] + span[None, :-1]).reshape(-1),
         ]
     )

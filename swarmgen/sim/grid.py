@@ -18,6 +18,8 @@ Bool = NDArray[np.bool_]
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 MEMBER_KEY = np.uint64(0xD1B54A32D192ED03)
 BLOCK = 8  # turn directions drawn at once
+SHIFT = 4
+STRETCH = 1 << SHIFT  # steps of a leg computed, and tested against the blocks, together
 GAMMAS = np.arange(BLOCK + 1, dtype=np.uint64) * _GOLDEN  # k * gamma, wrapping
 
 
@@ -71,39 +73,51 @@ def distinct(index: I64, stamp: NDArray[np.int32]) -> I64:
 
 @dataclass(frozen=True)
 class Points:
-    """Patches passed in one round, piece by piece (a piece is a straight stretch of one
-    member): per point the tick it is passed and its flat patch index (run included); the
-    points of piece i start at `first[i]`."""
+    """Patches passed in one round, stretch by stretch (a row: `STRETCH` consecutive steps of
+    one member along a straight leg): the flat patch index (run included) of each step, rows
+    end to end, and `dummy` (a patch index past every run's, never new, never near a target)
+    after a row's last step. Step j of row i is passed at tick `base[i] + j`; `linked[i]`: the
+    row before it holds the steps just before its first (the same leg, a full row)."""
 
-    gm: I64  # member of each piece
-    first: I64  # index of each piece's first point
-    tick: I64
-    flat: I64
+    gm: I64  # member of each row
+    base: I64  # tick of each row's first step
+    flat: NDArray[np.signedinteger]  # (rows * STRETCH,)
+    linked: Bool
 
     @staticmethod
     def empty() -> Points:
         """No points."""
         e = np.zeros(0, dtype=np.int64)
-        return Points(e, e, e, e)
+        return Points(e, e, e, e.astype(np.bool_))
+
+    @staticmethod
+    def single(g: I64, tick: int, flat: int, dummy: int) -> Points:
+        """One member standing on one patch at a tick."""
+        row = np.full(STRETCH, dummy, dtype=np.int64)
+        row[0] = flat
+        return Points(g, np.array([tick], dtype=np.int64), row, np.zeros(1, dtype=np.bool_))
 
     def __len__(self) -> int:
         return len(self.flat)
 
-    def piece(self, at: I64) -> I64:
-        """The piece of each point `at`."""
-        return np.searchsorted(self.first, at, side="right") - 1
-
     def ticks(self, at: I64) -> I64:
         """The tick at which each point `at` is passed."""
-        return self.tick[at]
+        ticks: I64 = self.base[at >> SHIFT] + (at & (STRETCH - 1))
+        return ticks
 
     def members(self, at: I64) -> I64:
         """The member passing each point `at`."""
-        return self.gm[self.piece(at)]
+        members: I64 = self.gm[at >> SHIFT]
+        return members
 
-    def until(self, end: I64, cells: int) -> Points:
-        """The points at or before each run's end tick (pieces become one per point)."""
-        keep = np.flatnonzero(self.tick <= end[self.flat // cells])
-        return Points(
-            self.gm[self.piece(keep)], np.arange(len(keep)), self.tick[keep], self.flat[keep]
-        )
+    def select(self, rows: Bool) -> Points:
+        """The rows flagged (in their order): whole members' rows, so links hold."""
+        steps = self.flat.reshape(-1, STRETCH)[rows].reshape(-1)
+        return Points(self.gm[rows], self.base[rows], steps, self.linked[rows])
+
+    def until(self, end: I64, cells: int, dummy: int) -> Points:
+        """The points at or before each run's end tick (the others become `dummy`)."""
+        ticks = self.base[:, None] + np.arange(STRETCH)[None, :]
+        flat = self.flat.reshape(-1, STRETCH)
+        late = ticks > end[np.minimum(flat, dummy - 1) // cells]
+        return Points(self.gm, self.base, np.where(late, dummy, flat).reshape(-1), self.linked)

@@ -18,6 +18,13 @@ fail and are retried once with the same parameters (`RetryHeartbeatStaleTrialCal
 seeded with `--seed` (default: the scenario's seed) plus the number of trials already in the study: a study is reproducible,
 and a resumed one does not replay the first run's proposals. A point that a completed trial
 already evaluated is answered from that trial (the runs are deterministic), not run again.
+
+Trials in parallel (`parallel` > 1, `--parallel K`): the study asks K trials at once (TPE with
+its constant liar, so the K differ), runs their points as one sweep through the executor (every
+run of the K trials in flight together), and tells the K results in the order asked. Everything
+happens in one thread in that order, so the study is a function of (seed, K): the same seed and K
+give the same trials; another K gives another (equally valid) study. A kill mid-batch leaves up
+to K RUNNING trials, recovered as above.
 """
 
 from __future__ import annotations
@@ -159,22 +166,34 @@ class Study:
 
     def evaluate(self, point: params.Point) -> tuple[list[float], int, int]:
         """The objectives of one point over its runs, the number of runs and of failed runs."""
-        from swarmgen.sim.sweep import simulate
+        return self.evaluate_many([point])[0]
 
-        variant = params.apply(self.scenario, point, self.names, "--space")
-        machines = self.machines(variant.data)
+    def evaluate_many(self, points: Sequence[params.Point]) -> list[tuple[list[float], int, int]]:
+        """`evaluate` of several points, their runs in one sweep through the executor."""
+        from swarmgen.sim.sweep import configurations, simulate
+
+        variants = [params.apply(self.scenario, p, self.names, "--space") for p in points]
+        machines = [self.machines(v.data) for v in variants]
         sim = simulate(
-            machines, variant.scenario, progress=self.progress,
-            points=[(machines, variant.scenario, variant.columns())],
+            machines[0], variants[0].scenario, progress=self.progress,
+            points=[(m, v.scenario, v.columns()) for m, v in zip(machines, variants, strict=True)],
             executor=self.executor or LocalExecutor(1),
         )  # fmt: skip
-        failed = sum(1 for r in sim.runs if r.reason == "failed")
-        values = [obj.evaluate(o, sim.runs, sim.configs, variant.scenario) for o in self.objectives]
-        return values, len(sim.runs), failed
+        owner = [i for i, v in enumerate(variants) for _ in configurations(machines[i], v.scenario)]
+        results = []
+        for i, variant in enumerate(variants):
+            runs = [r for r in sim.runs if owner[r.config] == i]
+            failed = sum(1 for r in runs if r.reason == "failed")
+            values = [obj.evaluate(o, runs, sim.configs, variant.scenario) for o in self.objectives]
+            results.append((values, len(runs), failed))
+        return results
 
 
-def make_sampler(name: str, seed: int, trials_so_far: int, objectives: int) -> Any:
-    """The seeded sampler: `--seed` plus the trials already in the study (see the module)."""
+def make_sampler(
+    name: str, seed: int, trials_so_far: int, objectives: int, parallel: bool = False
+) -> Any:
+    """The seeded sampler: `--seed` plus the trials already in the study (see the module);
+    `parallel`: TPE lies about the trials still running (constant liar) so a batch differs."""
     import optuna
 
     if name == "nsga2" or objectives > 1:
@@ -186,16 +205,26 @@ def make_sampler(name: str, seed: int, trials_so_far: int, objectives: int) -> A
             seed=(seed + trials_so_far) % 2**32, warn_independent_sampling=False
         )
     if name == "tpe":
-        return optuna.samplers.TPESampler(seed=(seed + trials_so_far) % 2**32)
+        if not parallel:
+            return optuna.samplers.TPESampler(seed=(seed + trials_so_far) % 2**32)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            return optuna.samplers.TPESampler(
+                seed=(seed + trials_so_far) % 2**32, constant_liar=True
+            )
     raise OptimizeError(f"--sampler {name!r}: one of {', '.join(SAMPLERS)}")
 
 
 def storage_of(url: str) -> Any:
-    """optuna's RDB storage at `url` (any SQLAlchemy URL), with heartbeats for shared ones."""
+    """optuna's RDB storage at `url` (any SQLAlchemy URL), with heartbeats for shared ones
+    (an in-memory SQLite database is this process's alone, and a heartbeat thread would get an
+    empty database of its own)."""
     import optuna
     from sqlalchemy.exc import SQLAlchemyError
 
     try:
+        if url == "sqlite:///:memory:":
+            return optuna.storages.RDBStorage(url)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
             retry = optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=1)
@@ -279,34 +308,119 @@ def _cached(study: optuna.Study, chosen: Mapping[str, Any]) -> list[float] | Non
     return None
 
 
+def _claim(spec: Study, trial: optuna.Trial) -> params.Point:
+    """A trial this process runs: its host and process recorded, its point drawn."""
+    trial.set_user_attr(_HOST, socket.gethostname())
+    trial.set_user_attr(_PID, os.getpid())
+    return tuple((d.name, d.suggest(trial)) for d in spec.space)
+
+
+def _result(trial: optuna.Trial, values: list[float], runs: int, failed: int, cached: bool) -> Any:
+    """What optuna is told: the value(s), or RuntimeError (a FAIL trial). `cached`: answered
+    from another trial's runs."""
+    if cached:
+        trial.set_user_attr("swarmgen.cached", True)
+    else:
+        trial.set_user_attr("swarmgen.runs", runs)
+        trial.set_user_attr("swarmgen.failed_runs", failed)
+    if failed:
+        raise RuntimeError(f"{failed} of {runs} runs failed")
+    if any(not math.isfinite(v) for v in values):
+        raise RuntimeError(f"an objective is not a number: {values}")
+    return values[0] if len(values) == 1 else tuple(values)
+
+
 def objective_of(spec: Study, study: optuna.Study) -> Callable[[optuna.Trial], Any]:
     """The function optuna calls per trial: parameters -> runs -> objective values."""
 
     def run(trial: optuna.Trial) -> Any:
-        trial.set_user_attr(_HOST, socket.gethostname())
-        trial.set_user_attr(_PID, os.getpid())
-        point = tuple((d.name, d.suggest(trial)) for d in spec.space)
+        point = _claim(spec, trial)
         cached = _cached(study, dict(point))
         if cached is not None:
-            trial.set_user_attr("swarmgen.cached", True)
-            values = cached
-        else:
-            values, runs, failed = spec.evaluate(point)
-            trial.set_user_attr("swarmgen.runs", runs)
-            trial.set_user_attr("swarmgen.failed_runs", failed)
-            if failed:
-                raise RuntimeError(f"{failed} of {runs} runs failed")
-        if any(not math.isfinite(v) for v in values):
-            raise RuntimeError(f"an objective is not a number: {values}")
-        return values[0] if len(values) == 1 else tuple(values)
+            return _result(trial, cached, 0, 0, True)
+        values, runs, failed = spec.evaluate(point)
+        return _result(trial, values, runs, failed, False)
 
     return run
 
 
+def run_batches(spec: Study, study: optuna.Study, count: int, parallel: int) -> None:
+    """`count` trials, `parallel` at a time: ask a batch, run its new points as one sweep
+    (a point repeated in the batch, or already completed, is run once), tell in order."""
+    import optuna
+
+    while count > 0:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            optuna.storages.fail_stale_trials(study)
+        with warnings.catch_warnings():  # the heartbeats are ours (`_heartbeats`)
+            warnings.filterwarnings("ignore", "Heartbeat of storage", UserWarning)
+            trials = [study.ask() for _ in range(min(parallel, count))]
+        told = 0
+        try:
+            with _heartbeats(study, [t._trial_id for t in trials]):
+                points = [_claim(spec, t) for t in trials]
+                known = {json.dumps(p): _cached(study, dict(p)) for p in points}
+                fresh = {json.dumps(p): p for p in points if known[json.dumps(p)] is None}
+                runs = spec.evaluate_many(list(fresh.values())) if fresh else []
+                evaluated = dict(zip(fresh, runs, strict=True))
+            first: set[str] = set()
+            for trial, point in zip(trials, points, strict=True):
+                key = json.dumps(point)
+                values, count_runs, failed = evaluated.get(key) or (known[key] or [], 0, 0)
+                cached = key not in evaluated or key in first  # run once, by its first trial
+                first.add(key)
+                try:
+                    study.tell(trial, _result(trial, values, count_runs, failed, cached))
+                except RuntimeError:
+                    study.tell(trial, state=optuna.trial.TrialState.FAIL)
+                told += 1
+        except BaseException:  # as optuna does for one trial: FAIL, then the error
+            for trial in trials[told:]:
+                study.tell(trial, state=optuna.trial.TrialState.FAIL)
+            raise
+        count -= len(trials)
+
+
+@contextlib.contextmanager
+def _heartbeats(study: optuna.Study, trial_ids: list[int]) -> Iterator[None]:
+    """Record the batch's heartbeats (shared databases) while it runs, as optuna does for one."""
+    import threading
+
+    storage = cast(Any, study._storage)  # RDBStorage: optuna's heartbeat interface
+    interval = getattr(storage, "get_heartbeat_interval", lambda: None)()
+    if interval is None:
+        yield
+        return
+    stop = threading.Event()
+
+    def beat() -> None:
+        while True:
+            for trial_id in trial_ids:
+                storage.record_heartbeat(trial_id)
+            if stop.wait(interval):
+                return
+
+    thread = threading.Thread(target=beat, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+
+
 def run_study(
-    spec: Study, storage_url: str, study_name: str, sampler: str, seed: int, trials: int
+    spec: Study,
+    storage_url: str,
+    study_name: str,
+    sampler: str,
+    seed: int,
+    trials: int,
+    parallel: int = 1,
 ) -> optuna.Study:
-    """Create or resume the study and run trials until `trials` have finished."""
+    """Create or resume the study and run trials until `trials` have finished, `parallel` of
+    them at a time."""
     import optuna
 
     optuna.logging.set_verbosity(optuna.logging.WARNING)
@@ -328,8 +442,12 @@ def run_study(
         )
     with sqlite_lease(storage_url) as alone:
         recover(study, alone)
-        study.sampler = make_sampler(sampler, seed, len(study.trials), len(spec.objectives))
+        study.sampler = make_sampler(
+            sampler, seed, len(study.trials), len(spec.objectives), parallel > 1
+        )
         remaining = max(0, trials - finished(study))
-        if remaining:
+        if remaining and parallel > 1:
+            run_batches(spec, study, remaining, parallel)
+        elif remaining:
             study.optimize(objective_of(spec, study), n_trials=remaining, catch=(RuntimeError,))
     return study

@@ -1,9 +1,10 @@
 """The files of `swarmgen optimize`: best parameters, trials CSV, figures, and the best point
 written back as a model variant.
 
-The variant: member counts and data defaults are model facts, so they go into a copy of the XMI
-(`best.xmi`: the single Swarm part of the type gets the count as its multiplicity, the datum its
-`defaultValue`); scenario parameters (world, targets, timing, ...) are not in the model, so the
+The variant: member counts, data defaults and camera radii are model facts, so they go into a
+copy of the XMI (`best.xmi`: the single Swarm part of the type gets the count as its multiplicity,
+the datum its `defaultValue`, the camera's hardware class its parameter's `defaultValue` when no
+other part uses that class); scenario parameters (world, targets, timing, ...) are not in the model, so the
 whole scenario with the best point applied goes beside it (`best-scenario.json`), ready for
 `swarmgen simulate best.xmi --scenario best-scenario.json`. A model that is not XMI (SCXML,
 Modelio), or a count spread over several parts, gets the scenario file only, and best.json says
@@ -156,7 +157,9 @@ def variant_files(
         "best-scenario.json": (json.dumps(variant.scenario.to_json(), indent=1) + "\n").encode()
     }
     notes: list[str] = []
-    model_values = [(k, v) for k, v in variant.params if k.endswith(".count") or ".data." in k]
+    model_values = [(k, v) for k, v in variant.params if k.endswith(".count") or ".data." in k] + [
+        (f"{t}.{k}", v) for t, values in variant.hardware.items() for k, v in values.items()
+    ]
     if model_path.suffix.lower() != ".xmi":
         notes.append("the model is not XMI: its best point is in best-scenario.json only")
         return files, notes
@@ -175,8 +178,11 @@ def variant_files(
 def _write_value(
     by_id: dict[str | None, etree._Element], model: Model, name: str, value: params.Value
 ) -> str | None:
-    """Write one count or datum default into the XMI tree; the reason when it cannot."""
+    """Write one count, datum or hardware default into the XMI tree; the reason when it
+    cannot."""
     kind, _, rest = name.partition(".")
+    if rest.count(".") == 1 and not rest.startswith("data."):
+        return _write_hardware(by_id, model, kind, rest, value)
     if rest == "count":
         parts = [p for s in model.swarms for p in s.members if p.type_name == kind]
         if len(parts) != 1 or parts[0].span.xmi_id not in by_id:
@@ -193,6 +199,27 @@ def _write_value(
     literal = _LITERAL.get(type(value), "uml:LiteralString")
     text = ("true" if value else "false") if isinstance(value, bool) else str(value)
     _replace(by_id[prop.span.xmi_id], "defaultValue", literal, text, prop.span.xmi_id)
+    return None
+
+
+def _write_hardware(
+    by_id: dict[str | None, etree._Element], model: Model, kind: str, rest: str, value: Any
+) -> str | None:
+    """A hardware parameter's default, in its component class (`part.param` of type `kind`)."""
+    part_name, _, param = rest.partition(".")
+    member = next((m for m in model.member_types if m.name == kind), None)
+    part = next((p for p in (member.hardware if member else ()) if p.name == part_name), None)
+    component = next((h for h in model.hardware if part and h.id == part.type_id), None)
+    prop = next((p for p in (component.parameters if component else ()) if p.name == param), None)
+    if part is None or prop is None or prop.span.xmi_id not in by_id:
+        return "not a parameter of the part's hardware class: in best-scenario.json only"
+    users = [p for m in model.member_types for p in m.hardware if p.type_id == part.type_id]
+    if len(users) > 1:
+        return (
+            f"its class {component.name if component else ''} is used by {len(users)} parts: "
+            "the view is in best-scenario.json only"
+        )
+    _replace(by_id[prop.span.xmi_id], "defaultValue", _LITERAL[float], str(value), prop.span.xmi_id)
     return None
 
 

@@ -6,9 +6,13 @@ A parameter is named as in the model or the scenario:
 - `TYPE.data.NAME`: the default of a member datum with a primitive type (the machines read it);
 - `targets`, `seed`, `max_ticks`, `stop_level`, `allocation`, `world.width`, `world.height`,
   `world.view`, `timing.KEY`, `placement.TYPE.spacing`, `placement.TYPE.headings`: the scenario's;
-- `TYPE.PART.PARAM`: a hardware parameter. The abstract world does not read any (members move
-  one patch per tick and see `world.view` patches), so naming one is an error that says so,
-  never a sweep that silently changes nothing.
+- `TYPE.PART.fovRadius`: a camera's field-of-view radius, in the model's metres: the type's view
+  becomes `floor(r / patch_m)` patches (`r` the largest of its cameras' radii, the swept one and
+  the others' model defaults; `patch_m` the scenario's `detailed.patch_m`, the one conversion
+  between the model's metres and the grid). A point that sweeps no camera of a type leaves it
+  `world.view`, so a model's defaults never change a scenario's results. Any other hardware
+  parameter (`maxSpeed`: members move one patch per tick, the world's unit of time) is an error
+  that says so, never a sweep that silently changes nothing.
 
 Values: `V1,V2,...` (each a JSON scalar, else a string) or a range `START:STOP:STEP` with STOP
 included when the steps reach it. Sweep files (JSON, or TOML by extension) hold
@@ -33,7 +37,7 @@ from swarmgen import jsonfile
 from swarmgen.console import shown
 from swarmgen.inputs import InputRefused, read_limited
 from swarmgen.ir.primitives import Primitive, primitive
-from swarmgen.sim.limits import MAX_LIST, MAX_RUNS, SCENARIO_BYTES
+from swarmgen.sim.limits import MAX_LIST, MAX_RUNS, MAX_VIEW, SCENARIO_BYTES
 from swarmgen.sim.scenario import TIMING_DEFAULTS, Scenario, ScenarioError, parse
 
 if TYPE_CHECKING:
@@ -42,6 +46,7 @@ if TYPE_CHECKING:
 
 Value = bool | int | float | str
 Point = tuple[tuple[str, Value], ...]  # (name, value) in the order the sweep names them
+CAMERA = "fovRadius"  # the hardware parameter the abstract world reads (a type's view)
 
 # scenario parameters -> the JSON path of the scenario file they set
 _SCENARIO = {
@@ -71,6 +76,9 @@ class Names:
     data: dict[str, dict[str, Primitive]] = field(default_factory=dict)
     hardware: dict[str, tuple[str, ...]] = field(default_factory=dict)
     unread: dict[str, frozenset[str]] = field(default_factory=dict)  # data nothing reads
+    # per type: its cameras' `part.fovRadius` -> the model's default radius (None: none given)
+    cameras: dict[str, dict[str, float | None]] = field(default_factory=dict)
+    behaviours: dict[str, tuple[str, ...]] = field(default_factory=dict)  # what each type runs
 
     def known(self) -> list[str]:
         """Every name that may be swept, for suggestions."""
@@ -79,6 +87,7 @@ class Names:
             names.append(f"{kind}.count")
             names += [f"{kind}.data.{d}" for d in self.data.get(kind, {})]
             names += [f"placement.{kind}.{p}" for p in _PLACEMENT]
+            names += [f"{kind}.{c}" for c in self.cameras.get(kind, {})]
         return names + [f"placement.*.{p}" for p in _PLACEMENT]
 
 
@@ -93,14 +102,22 @@ def names_of(model: Model, charts: Sequence[Chart]) -> Names:
             data[chart.member] = {name: kind for name, kind in typed if kind is not None}
             unread[chart.member] = _unread(chart)
     hardware: dict[str, tuple[str, ...]] = {}
+    cameras: dict[str, dict[str, float | None]] = {}
     for member in model.member_types:
         found = []
         for part in member.hardware:
             component = components.get(part.type_id)
-            found += [f"{part.name}.{p.name}" for p in (component.parameters if component else ())]
+            for p in component.parameters if component else ():
+                found.append(f"{part.name}.{p.name}")
+                if p.name == CAMERA:
+                    default = p.default
+                    number = isinstance(default, int | float) and not isinstance(default, bool)
+                    radius = float(default) if number else None  # type: ignore[arg-type]
+                    cameras.setdefault(member.name, {})[f"{part.name}.{p.name}"] = radius
         hardware[member.name] = tuple(found)
     types = tuple(c.member for c in charts if c.member is not None)
-    return Names(types, data, hardware, unread)
+    behaviours = {c.member: tuple(b.name for b in c.behaviours) for c in charts if c.member}
+    return Names(types, data, hardware, unread, cameras, behaviours)
 
 
 def _unread(chart: Chart) -> frozenset[str]:
@@ -251,6 +268,7 @@ class Variant:
     params: Point
     scenario: Scenario
     data: dict[str, dict[str, Value]] = field(default_factory=dict)
+    hardware: dict[str, dict[str, Value]] = field(default_factory=dict)  # type -> part.param
 
     def columns(self) -> tuple[tuple[str, Value], ...]:
         """The parameters reported as their own columns (counts and targets have theirs)."""
@@ -270,10 +288,17 @@ def apply(base: Scenario, point: Point, names: Names, where: str) -> Variant:
     """The scenario and data defaults of one point; ParamError for a bad name or value."""
     doc = base.to_json()
     data: dict[str, dict[str, Value]] = {}
+    hardware: dict[str, dict[str, Value]] = {}
     given = list(base.given)
     for name, value in point:
         _check_name(name, names, where)
-        if _is_count(name):
+        kind, _, rest = name.partition(".")
+        if rest in names.cameras.get(kind, {}):
+            radius = _typed(value, Primitive.REAL, name, where)
+            if not isinstance(radius, float) or radius < 0:
+                raise ParamError(f"{where}: {shown(name)}: expected a radius >= 0, got {value}")
+            hardware.setdefault(kind, {})[rest] = radius
+        elif _is_count(name):
             kind = name.split(".")[0]
             doc["members"] = {**doc["members"], kind: [value]}
             given.append(kind)
@@ -293,13 +318,48 @@ def apply(base: Scenario, point: Point, names: Names, where: str) -> Variant:
             _set(doc, _SCENARIO[name], value)
             if name == "targets":
                 doc["target_positions"] = None
+    for kind, radii in hardware.items():
+        _check_sees(base, names, [f"{kind}.{r}" for r in radii], where)
+        view = _view_of(base, {**names.cameras[kind], **radii}, where, kind)
+        doc["world"] = {**doc["world"], "views": {**doc["world"].get("views", {}), kind: view}}
     try:
         scenario = parse(doc, base.name)
     except ScenarioError as err:
         shown_point = ", ".join(f"{k}={json.dumps(v)}" for k, v in point)
         raise ParamError(f"{where}: {shown_point}: {err}") from None
     scenario = replace(scenario, given=tuple(dict.fromkeys(given)))
-    return Variant(point, scenario, data)
+    return Variant(point, scenario, data, hardware)
+
+
+def _check_sees(base: Scenario, names: Names, swept: list[str], where: str) -> None:
+    """A type's view matters only if its machine covers or monitors: else ParamError."""
+    from swarmgen.sim.library import Library
+
+    kind = swept[0].split(".")[0]
+    library = Library(base.library)
+    seeing = {library.get(b).name for b in names.behaviours.get(kind, ())}
+    if not seeing & {"Coverage", "TargetMonitoring"}:
+        raise ParamError(
+            f"{where}: {shown(', '.join(swept))}: no behaviour of the {kind} machine covers or monitors "
+            "(Coverage, TargetMonitoring, or the scenario's library aliases of them), so its "
+            "view cannot change a run"
+        )
+
+
+def _view_of(base: Scenario, radii: Mapping[str, Any], where: str, kind: str) -> int:
+    """A type's view in patches from its cameras' radii in metres (module docstring)."""
+    from swarmgen.sim.detailed.params import detailed_params
+
+    patch = detailed_params(base).patch_m
+    radius = max((r for r in radii.values() if isinstance(r, float)), default=0.0)
+    view = math.floor(radius / patch + 1e-9)
+    if view > MAX_VIEW:
+        shown_radii = ", ".join(f"{kind}.{k}={v}" for k, v in radii.items())
+        raise ParamError(
+            f"{where}: {shown_radii}: a view of {view} patches ({radius:g} m over patches of "
+            f"{patch:g} m, detailed.patch_m); the largest is {MAX_VIEW}"
+        )
+    return view
 
 
 def _set(doc: dict[str, Any], path: tuple[str, ...], value: Value) -> None:
@@ -317,9 +377,9 @@ def _check_name(name: str, names: Names, where: str) -> None:
     kind, _, rest = name.partition(".")
     if rest in names.hardware.get(kind, ()):
         raise ParamError(
-            f"{where}: {shown(name)} is a hardware parameter of the model, but the abstract "
-            "simulator does not read hardware parameters (members move one patch per tick and "
-            "see world.view patches): sweep world.view, or use a datum the machines read"
+            f"{where}: {shown(name)} is a hardware parameter the abstract simulator does not "
+            f"read: it reads a camera's {CAMERA} (the type's view); members move one patch per "
+            'tick whatever their speed (docs/simulate.md, "Sweeping any parameter")'
         )
     close = difflib.get_close_matches(name, known, n=1, cutoff=0.6)
     hint = f"; did you mean {close[0]}?" if close else ""

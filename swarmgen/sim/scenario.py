@@ -2,7 +2,7 @@
 
     {
       "name": "coverage",
-      "world": {"width": 201, "height": 201, "view": 1},
+      "world": {"width": 201, "height": 201, "view": 1},   and "views": {"UAV": 2}, a type's own
       "members": {"UAV": [1, 2, 4, 8], "UGV": 0},      count, list of counts (swept) or "=TYPE"
       "placement": {"*": {"layout": "south", "spacing": 4, "headings": "fan"}},
       "targets": [0],                                   counts (swept); or "target_positions"
@@ -102,6 +102,8 @@ class Scenario:
     width: int = 201
     height: int = 201
     view: int = 1
+    # a member type's own view radius (a swept camera `fovRadius`, `sim.params`); else `view`
+    views: dict[str, int] = field(default_factory=dict)
     members: dict[str, list[int] | str] = field(default_factory=dict)
     placement: dict[str, Placement] = field(default_factory=dict)
     targets: list[int] = field(default_factory=lambda: [0])
@@ -126,6 +128,10 @@ class Scenario:
     def placement_of(self, member_type: str) -> Placement:
         """The placement of a member type, else of `*`, else the default."""
         return self.placement.get(member_type) or self.placement.get("*") or Placement()
+
+    def view_of(self, member_type: str) -> int:
+        """The view radius (patches) of a member type: its own, else the world's."""
+        return self.views.get(member_type, self.view)
 
     def origin_tick(self) -> int:
         """The tick reported as time 0: that of the `clock_origin` station event."""
@@ -164,7 +170,12 @@ class Scenario:
         return {
             "name": self.name,
             "description": self.description,
-            "world": {"width": self.width, "height": self.height, "view": self.view},
+            "world": {
+                "width": self.width,
+                "height": self.height,
+                "view": self.view,
+                **({"views": self.views} if self.views else {}),
+            },
             "members": self.members,
             "placement": {
                 k: {"layout": p.layout, "spacing": p.spacing, "headings": p.headings}
@@ -238,7 +249,7 @@ def parse(payload: Any, default_name: str = "scenario") -> Scenario:
 def _parse(payload: Any, default_name: str) -> Scenario:
     top = jsonfile.expect_object(payload, "$")
     jsonfile.check_keys(top, _KEYS, "$")
-    world = _section(top, "world", {"width", "height", "view"})
+    world = _section(top, "world", {"width", "height", "view", "views"})
     width = _int(world, "width", 201, "$.world", 1, MAX_SIDE)
     height = _int(world, "height", 201, "$.world", 1, MAX_SIDE)
     view = _int(world, "view", 1, "$.world", 0, MAX_VIEW)
@@ -258,6 +269,7 @@ def _parse(payload: Any, default_name: str) -> Scenario:
         width=width,
         height=height,
         view=view,
+        views=_views(jsonfile.expect_object(world.get("views", {}), "$.world.views")),
         members=_members(_section(top, "members", None)),
         placement=_placements(_section(top, "placement", None)),
         targets=targets,
@@ -306,6 +318,13 @@ def _counts(value: Any, where: str, low: int, high: int) -> list[int]:
     return [
         jsonfile.expect_int(v, prefix or f"{where}[{i}]", low, high) for i, v in enumerate(items)
     ]
+
+
+def _views(section: dict[str, Any]) -> dict[str, int]:
+    return {
+        kind: jsonfile.expect_int(value, jsonfile.key_path("$.world.views", kind), 0, MAX_VIEW)
+        for kind, value in section.items()
+    }
 
 
 def _members(section: dict[str, Any]) -> dict[str, list[int] | str]:

@@ -3,7 +3,10 @@
 A bounded grid of `width` x `height` patches without obstacles; patch (i, j) is the unit square
 centred on the point (i, j), so a body at (x, y) stands on patch (floor(x + 0.5), floor(y + 0.5)).
 Members move one patch length per tick. A member sees the patches within `view` of its own in
-both axes (view 1: its patch and the 8 around it, the Moore neighbourhood).
+both axes (view 1: its patch and the 8 around it, the Moore neighbourhood). Member types may
+see differently (`Scenario.views`): the members of one view radius form a *sight* class, and
+what they stood on, and which patches have a target in their view, is kept per class; the
+grid's padding is the largest view, and which patches are seen is shared by all.
 
 The batch holds `runs` independent repetitions with the same composition; member `g` of the
 batch is member `g % per_run` of run `g // per_run`. Everything is an array over all members or
@@ -29,11 +32,12 @@ leg whose view holds no unseen patch and no target are skipped without computing
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmgen.sim.blocks import STRETCH, Blocks, entering, padded_index
+from swarmgen.sim.blocks import Blocks, entering
 from swarmgen.sim.grid import (
     BLOCK,
     F64,
@@ -41,6 +45,8 @@ from swarmgen.sim.grid import (
     I64,
     INF,
     MEMBER_KEY,
+    SHIFT,
+    STRETCH,
     U64,
     Bool,
     Geometry,
@@ -48,11 +54,12 @@ from swarmgen.sim.grid import (
     distinct,
     mix64,
 )
+from swarmgen.sim.targets import CLAIMED, FOUND, RESCUED, UNFOUND, Targets
 
-UNFOUND, FOUND, CLAIMED, RESCUED = 0, 1, 2, 3  # target status
+__all__ = ["CLAIMED", "FOUND", "RESCUED", "UNFOUND", "World"]
 
 
-class World:
+class World(Targets):
     """Bodies, coverage and targets of `runs` repetitions; see the module docstring."""
 
     def __init__(
@@ -63,9 +70,11 @@ class World:
         start_y: F64,
         headings: F64,
         targets: I64,
+        views: I64 | None = None,
     ) -> None:
         """`start_x`, `start_y`, `headings`: per member of one run; `run_keys`: one random key
-        per run; `targets`: (runs, count, 2) patch coordinates."""
+        per run; `targets`: (runs, count, 2) patch coordinates; `views`: per member of one run,
+        its view radius, at most `geometry.view` (default: that view for every member)."""
         self.geometry = geo = geometry
         self.W, self.H, self.v = geo.width, geo.height, geo.view
         self.WH = geo.cells
@@ -74,6 +83,10 @@ class World:
         self.runs = runs = len(run_keys)
         self.per_run = per_run = len(start_x)
         self.run_of: I64 = np.repeat(np.arange(runs, dtype=np.int64), per_run)
+        own = np.full(per_run, geo.view, dtype=np.int64) if views is None else np.asarray(views)
+        # the sight classes: their view radii, and each member's class
+        self.views: list[int] = sorted({int(v) for v in own}) or [geo.view]
+        self.sight: I64 = np.tile(np.searchsorted(self.views, own), runs).astype(np.int64)
         self._init_bodies(run_keys, start_x, start_y, headings)
         self.blocks = Blocks(runs, geo)  # before the targets: their views mark blocks
         self._init_coverage()
@@ -108,42 +121,44 @@ class World:
         self.reports: Bool = np.zeros(count, dtype=np.bool_)  # its Coverage ends on a find
 
     def _init_coverage(self) -> None:
-        """Coverage: first tick on each patch, which patches were stood on / seen (the seen
-        flags are padded by `view` so a view never needs bounds checks), patches seen per run."""
-        runs = self.runs
-        self.first: NDArray[np.int32] = np.full(runs * self.WH, INF, dtype=np.int32)
-        self.stood: NDArray[np.uint8] = np.zeros(runs * self.WH, dtype=np.uint8)
+        """Coverage: per sight class the first tick on each patch and which patches were stood
+        on; which patches were seen (the flags are padded by the largest view so a view never
+        needs bounds checks); patches seen per run."""
+        runs, classes = self.runs, len(self.views)
+        # every per-patch array is indexed in the padded grid (run included, `cell`), as the
+        # round's positions are; its padding is never stood on, seen from the start
+        self.first: NDArray[np.int32] = np.full((classes, runs * self.PWH), INF, dtype=np.int32)
+        # patches stood on, and past them `dummy`: the index `Points` gives past a row's end,
+        # always stood on (never new) and never near a target
+        self.dummy = runs * self.PWH
+        # the dtype of positions
+        self.index: np.dtype[Any] = np.dtype(np.int32 if self.dummy < 2**31 else np.int64)
+        self.stood: NDArray[np.uint8] = np.zeros((classes, self.dummy + 1), dtype=np.uint8)
+        self.stood[:, self.dummy] = 1
         seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
         seen[:, self.v : self.v + self.H, self.v : self.v + self.W] = 0
         self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
         self.covered: I64 = np.zeros(runs, dtype=np.int64)
         self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
-        side = 2 * self.v + 1
-        oy_, ox_ = np.divmod(np.arange(side * side, dtype=np.int64), side)
-        self._padded = padded_index(runs, self.geometry)
-        self._view_offsets = ((oy_ - self.v) * self.PW + (ox_ - self.v)).astype(self._padded.dtype)
-
-    def _init_targets(self, targets: I64) -> None:
-        """Where the targets are, their status and the ticks of what happened to them."""
-        runs = self.runs
-        targets = np.asarray(targets, dtype=np.int64).reshape(runs, -1, 2)
-        self.tx: I64 = targets[:, :, 0].copy()
-        self.ty: I64 = targets[:, :, 1].copy()
-        shape = self.tx.shape
-        self.status: NDArray[np.int8] = np.zeros(shape, dtype=np.int8)
-        self.finder: I64 = np.full(shape, -1, dtype=np.int64)
-        self.found_tick: I64 = np.full(shape, -1, dtype=np.int64)  # first find taken up
-        self.reported_tick: I64 = np.full(shape, -1, dtype=np.int64)  # latest targetFound
-        self.rescued_tick: I64 = np.full(shape, -1, dtype=np.int64)
-        self.unfound: I64 = np.full(runs, shape[1], dtype=np.int64)
-        self.fresh: list[list[int]] = [[] for _ in range(runs)]  # reported this tick
-        # near[c] > 0: an unfound target is in view from patch c
-        self.near: NDArray[np.int16] = np.zeros(runs * self.WH, dtype=np.int16)
-        for run in range(runs):
-            for target in range(shape[1]):
-                self._near_add(run, target, 1)
+        self._view_offsets = []  # per sight class: its view around a patch, in the padded grid
+        for v in self.views:
+            oy_, ox_ = np.divmod(np.arange((2 * v + 1) ** 2, dtype=np.int64), 2 * v + 1)
+            offsets = ((oy_ - v) * self.PW + (ox_ - v)).astype(self.index)
+            self._view_offsets.append(offsets)
 
     # --- geometry
+
+    def cell(self, run: I64 | int, ix: int, iy: int) -> I64:
+        """The flat index of patch (ix, iy) of runs in the padded grids."""
+        cell: I64 = (np.asarray(run, dtype=np.int64) * self.PH + iy + self.v) * self.PW
+        cell += ix + self.v
+        return cell
+
+    def patch(self, cell: int) -> tuple[int, int, int]:
+        """The run and patch (ix, iy) of a flat index in the padded grids."""
+        run, rest = divmod(cell, self.PWH)
+        iy, ix = divmod(rest, self.PW)
+        return run, ix - self.v, iy - self.v
 
     def _inside(self, u: F64, w: F64) -> Bool:
         return (u >= 0) & (u < self.W) & (w >= 0) & (w < self.H)
@@ -205,9 +220,8 @@ class World:
             self._longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g])[0]
         )
         ix, iy = int(self.ox[member]), int(self.oy[member])
-        flat = np.array([int(self.run_of[member]) * self.WH + iy * self.W + ix])
-        zero = np.zeros(1, dtype=np.int64)
-        self._commit(Points(g, zero, np.array([tick], dtype=np.int64), flat))
+        cell = int(self.cell(int(self.run_of[member]), ix, iy))
+        self._commit(Points.single(g, tick, cell, self.dummy))
         if self.detects(member):
             return self.targets_in_view(member, ix, iy)
         return []
@@ -318,27 +332,27 @@ class World:
             np.minimum(ya, yb),
             np.maximum(ya, yb),
         )
-        piece, sa, n = piece[keep], sa[keep], cnt[keep]
-        total = int(n.sum())
-        if not total:
+        piece, sa, cnt = piece[keep], sa[keep], cnt[keep]
+        if not piece.size:
             return Points.empty()
+        # a row whose leg's previous stretch is the row before it (kept, so full and adjacent)
+        linked = np.zeros(len(piece), dtype=np.bool_)
+        linked[1:] = (piece[1:] == piece[:-1]) & (sa[1:] == sa[:-1] + STRETCH)
         gm, s0, body = gm[piece], s0[piece], body[piece]
-        ox, oy, dx, dy = body[:, 0], body[:, 1], body[:, 2], body[:, 3]
-        first = np.cumsum(n) - n
-        # steps from the segment origin: sa .. sa + n - 1 per stretch
-        steps_i = np.arange(total, dtype=np.int64)
-        steps_i += np.repeat(sa - first, n)
-        tick = steps_i + np.repeat(s0, n)
-        steps = steps_i.astype(np.float64)
-        u = steps * np.repeat(dx, n)
-        u += np.repeat(ox, n)
-        w = steps * np.repeat(dy, n)
-        w += np.repeat(oy, n)
-        flat = w.astype(np.int64)  # in the grid: truncation is floor
-        flat *= self.W
-        flat += u.astype(np.int64)
-        flat += np.repeat(self.run_of[gm] * self.WH, n)
-        return Points(gm, first, tick, flat)
+        # one row per stretch: steps sa .. sa + STRETCH - 1 from the segment origin (the same
+        # expression, step * heading + origin, as everywhere), `dummy` past the stretch's end
+        column = np.arange(STRETCH, dtype=np.float64)
+        steps = sa.astype(np.float64)[:, None] + column[None, :]
+        u = steps * body[:, 2, None]
+        u += body[:, 0, None]
+        w = steps * body[:, 3, None]
+        w += body[:, 1, None]
+        flat: NDArray[np.signedinteger] = w.astype(self.index)  # in the grid: floor
+        flat *= self.PW
+        flat += u.astype(self.index)
+        flat += self.cell(self.run_of[gm], 0, 0).astype(self.index)[:, None]
+        flat[column[None, :] >= cnt[:, None]] = self.dummy
+        return Points(gm, s0 + sa, flat.reshape(-1), linked)
 
     def _snapshot(self, g: I64) -> list[NDArray[np.generic]]:
         return [a[g].copy() for a in self._state()]
@@ -369,124 +383,85 @@ class World:
         points = self._pieces(movers, now[runs], horizon[runs])
         finds: list[tuple[int, int, int, int]] = []
         if len(points) and watching:
-            hit = np.flatnonzero(self.near[points.flat] > 0)
+            hit = np.flatnonzero(self._near_points(points) > 0)
             hit = hit[watch[points.members(hit)]]
             if hit.size:
-                hit_runs = points.flat[hit] // self.WH
+                hit_runs = points.flat[hit] // self.PWH
                 hit_ticks = points.ticks(hit)
                 np.minimum.at(end, hit_runs, hit_ticks)
                 at = hit[hit_ticks == end[hit_runs]]
                 for i in at[np.argsort(points.members(at), kind="stable")]:
-                    run, rest = divmod(int(points.flat[i]), self.WH)
-                    iy, ix = divmod(rest, self.W)
+                    run, ix, iy = self.patch(int(points.flat[i]))
                     finds.append((run, int(points.members(np.array([i]))[0]), ix, iy))
                 cut = end[runs] < horizon[runs]
                 if cut.any():  # replay those runs' members up to the find (same draws)
                     self._restore(movers, saved, cut)
                     self._pieces(movers[cut], now[runs[cut]], end[runs[cut]], False)
-                    points = points.until(end, self.WH)
+                    points = points.until(end, self.PWH, self.dummy)
         self._commit(points)
         return end, finds
+
+    def _near_points(self, points: Points) -> NDArray[np.int16]:
+        """`near` at each point, for the sight class of the member passing it."""
+        near: NDArray[np.int16]
+        if len(self.views) == 1:
+            near = self.near[0][points.flat]
+            return near
+        sight = np.repeat(self.sight[points.gm], STRETCH)
+        near = self.near[sight, points.flat]
+        return near
 
     # --- coverage and targets
 
     def _commit(self, points: Points) -> None:
-        """Record the patches members stood on. Rounds go forward in time per run, so only
-        patches never stood on before can change; the patches they bring into view are counted
-        (`covered`); *when* each patch was first seen is derived at the end (`seen_times`)."""
+        """Record the patches members stood on, per sight class (`_commit_sight`)."""
+        if len(self.views) == 1:
+            self._commit_sight(0, points)
+            return
+        sight = self.sight[points.gm]
+        for k in range(len(self.views)):
+            self._commit_sight(k, points.select(sight == k))
+
+    def _commit_sight(self, k: int, points: Points) -> None:
+        """Record the patches members of sight class k stood on. Rounds go forward in time per
+        run, so only patches never stood on before by the class can change; the patches they
+        bring into view are counted (`covered`); *when* each patch was first seen is derived at
+        the end (`seen_times`)."""
         if not len(points):
             return
-        new = np.flatnonzero(self.stood[points.flat] == 0)
+        stood = self.stood[k]
+        new = np.flatnonzero(stood[points.flat] == 0)
         if not new.size:
             return
         flat = points.flat[new]
-        np.minimum.at(self.first, flat, points.tick[new].astype(np.int32))
+        np.minimum.at(self.first[k], flat, points.ticks(new).astype(np.int32))
         # a patch passed twice brings the same view: `distinct` below drops the repeats
-        self.stood[flat] = 1
-        # each point's predecessor in its piece stands with its whole view seen (now or
-        # before): only what the step adds can be new; a piece's first point brings its view
-        start = np.zeros(len(points), dtype=np.bool_)
-        start[points.first[points.first < len(points)]] = True
-        start[0] = True
+        stood[flat] = 1
+        # each point's predecessor stands with its whole view seen (now or before): only what
+        # the step adds can be new; a row's first point brings its view, unless the row before
+        # it is its leg's previous stretch (the predecessor is then that row's last point)
+        start = (new & (STRETCH - 1)) == 0
+        start[start] = ~points.linked[new[start] >> SHIFT]
         around = entering(
-            self._padded[flat],
-            self._padded[points.flat[new - 1]],  # new - 1 == -1 only at a start
-            start[new],
+            flat,
+            points.flat[new - 1],  # at a start: another row's, unused
+            start,
             self.geometry,
-            self._view_offsets,
+            self._view_offsets[k],
+            self.views[k],
         )
         around = around[self.seen_flag[around] == 0]
         fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh] = 1
-        self.covered += np.bincount(fresh // self.PWH, minlength=self.runs)
-        self.blocks.seen(fresh)
-
-    def _near_add(self, run: int, target: int, delta: int) -> None:
-        v = self.v
-        x, y = int(self.tx[run, target]), int(self.ty[run, target])
-        grid = self.near.reshape(self.runs, self.H, self.W)
-        rows = slice(max(0, y - v), min(self.H, y + v + 1))
-        cols = slice(max(0, x - v), min(self.W, x + v + 1))
-        grid[run, rows, cols] += delta
-        ys, xs = np.mgrid[rows, cols]
-        self.blocks.change(self.blocks.block_of(run, xs.ravel(), ys.ravel()), delta)
-
-    def targets_in_view(self, member: int, ix: int, iy: int) -> list[int]:
-        """The unfound targets of the member's run within view of patch (ix, iy)."""
-        run = int(self.run_of[member])
-        near = (
-            (np.abs(self.tx[run] - ix) <= self.v)
-            & (np.abs(self.ty[run] - iy) <= self.v)
-            & (self.status[run] == UNFOUND)
-        )
-        return [int(t) for t in np.flatnonzero(near)]
-
-    def report(self, run: int, target: int, member: int, tick: int) -> None:
-        """A member reported a target (targetFound): nobody else will find it now."""
-        if self.status[run, target] == UNFOUND:
-            self._near_add(run, target, -1)
-            self.unfound[run] -= 1
-        self.status[run, target] = FOUND
-        self.finder[run, target] = member
-        self.reported_tick[run, target] = tick
-        self.fresh[run].append(target)
-
-    def claim(self, run: int, target: int) -> None:
-        """The finder took the find up (a behaviour of it started on this target)."""
-        if self.status[run, target] == FOUND:
-            self.status[run, target] = CLAIMED
-            if self.found_tick[run, target] < 0:
-                self.found_tick[run, target] = self.reported_tick[run, target]
-
-    def forget(self, run: int, target: int) -> None:
-        """A find nobody took up: the target can be found again."""
-        if self.status[run, target] in (FOUND, CLAIMED):
-            self.status[run, target] = UNFOUND
-            self.finder[run, target] = -1
-            self._near_add(run, target, 1)
-            self.unfound[run] += 1
-
-    def rescue(self, run: int, target: int, tick: int) -> None:
-        """A target was rescued at `tick` (found then, at the latest)."""
-        if self.status[run, target] == RESCUED:
-            return
-        if self.status[run, target] == UNFOUND:
-            self._near_add(run, target, -1)
-            self.unfound[run] -= 1
-        if self.found_tick[run, target] < 0:
-            self.found_tick[run, target] = max(self.reported_tick[run, target], tick)
-        self.status[run, target] = RESCUED
-        self.rescued_tick[run, target] = tick
+        self.covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own
 
     def seen_times(self, run: int) -> NDArray[np.int32]:
         """When each patch of a run was first seen (INF: never), as a (height, width) grid: the
-        minimum of `first` over the view around each patch."""
-        v = self.v
-        first = self.first.reshape(self.runs, self.H, self.W)[run]
-        padded = np.full((self.PH, self.PW), INF, dtype=np.int32)
-        padded[v : v + self.H, v : v + self.W] = first
+        minimum, over the sight classes, of their `first` over their view around each patch."""
         seen = np.full((self.H, self.W), INF, dtype=np.int32)
-        for oy in range(2 * v + 1):
-            for ox in range(2 * v + 1):
-                np.minimum(seen, padded[oy : oy + self.H, ox : ox + self.W], out=seen)
+        for k, v in enumerate(self.views):
+            first = self.first[k].reshape(self.runs, self.PH, self.PW)[run]  # padding: INF
+            for oy in range(self.v - v, self.v + v + 1):
+                for ox in range(self.v - v, self.v + v + 1):
+                    np.minimum(seen, first[oy : oy + self.H, ox : ox + self.W], out=seen)
         return seen
