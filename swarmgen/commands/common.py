@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
-from swarmgen import __version__, console
+from swarmgen import __version__, collector, console
 from swarmgen.errors import SwarmgenError
 
 if TYPE_CHECKING:
@@ -49,6 +49,19 @@ def guarded(command: Callable[P, R]) -> Callable[P, R]:
             if _debug():
                 traceback.print_exc()
             sys.exit(INTERNAL_ERROR)
+
+    return wrapper
+
+
+def batch(command: Callable[P, R]) -> Callable[P, R]:
+    """A batch command (validate, compile, graph): run with the cyclic garbage collector off
+    (`swarmgen.collector`), its imports included."""
+
+    @wraps(command)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        """The command with the collector off."""
+        with collector.off_for_batch():
+            return command(*args, **kwargs)
 
     return wrapper
 
