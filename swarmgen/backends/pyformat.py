@@ -19,6 +19,7 @@ them: `pyknown`); every other statement is tokenized on its own.
 
 from __future__ import annotations
 
+import functools
 import io
 import re
 import tokenize
@@ -169,10 +170,14 @@ def _requoted(pieces: list[str]) -> str:
     return "".join(pieces)
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def quick_line(line: str) -> str | None:
     """`line` as the tokenized path prints it, when that is a copy with black's quote change
     (a whole statement on one line that fits, with only plain string literals and nothing black
-    rewrites); None when in doubt. `line` begins a statement and is no comment or blank line."""
+    rewrites); None when in doubt. `line` begins a statement and is no comment or blank line.
+    Memoised (in this process, bounded): the helper functions' lines are asked for when they
+    are laid out and again when each module that prints them is formatted, and the smach and
+    asyncio members print the same bodies."""
     plain = _plain(line) if len(line) <= LINE_LENGTH else None
     if plain is None:
         return None

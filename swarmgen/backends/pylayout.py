@@ -132,7 +132,18 @@ def layout(call: Call, depth: int) -> list[str] | None:
 
 def _plain_code(text: str) -> bool:
     """The statement's code outside strings is in the narrow form black only re-quotes."""
-    code = "@".join(pyformat.STRINGS.split(text)[::2])
+    return _plain_shape(_DIGITS.sub("0", pyformat.STRINGS.sub("@", text)))
+
+
+# Every run of digits read as `0`: both patterns see digits only through classes holding every
+# digit and repeat them with `*`, so the shape matches exactly when the code does. Statements
+# differ mostly in their strings and numbers (`_cond_12`), so a few dozen shapes cover a chart
+# and `_REWRITTEN`'s scan (its lookbehinds are tried at every position) runs once per shape.
+_DIGITS = re.compile(r"\d+")
+
+
+@functools.lru_cache(maxsize=4096)
+def _plain_shape(code: str) -> bool:
     return _ALLOWED.fullmatch(code) is not None and _REWRITTEN.search(code) is None
 
 
