@@ -8,11 +8,12 @@ hashable and comparable in tests. References between nodes are by `id` (the xmi:
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from swarmgen.expr import Action, Binding, Expr
+from swarmgen.ir import trusted
 from swarmgen.span import Span
 
 Value = bool | int | float | str | None
@@ -21,9 +22,18 @@ DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
 
 
 class Node(BaseModel):
-    """The base of every IR node: frozen, no unknown fields."""
+    """The base of every IR node: frozen, no unknown fields. Validated when made, except by
+    `ir.build` (`ir.trusted`: it passes every field its declared type already); the
+    validators are built on first use, so a `validate` run never builds them."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True)
+
+    def __init__(self, **data: Any) -> None:
+        """Validate `data` into the node, or take it as it is inside `trusted.by_builder`."""
+        if trusted.active():
+            trusted.construct(self, data)
+        else:
+            super().__init__(**data)
 
 
 # --- data
@@ -335,7 +345,3 @@ class Model(Node):
     events: tuple[Event, ...]
     machines: tuple[Machine, ...]
     uses_profile: bool  # any swarm-profile stereotype applied: the stricter rules apply
-
-
-State.model_rebuild()
-Region.model_rebuild()
