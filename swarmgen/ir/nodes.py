@@ -30,7 +30,7 @@ class Node(BaseModel):
 
     def __init__(self, **data: Any) -> None:
         """Validate `data` into the node, or take it as it is inside `trusted.by_builder`."""
-        if trusted.active():
+        if trusted.ACTIVE.get():
             trusted.construct(self, data)
         else:
             super().__init__(**data)

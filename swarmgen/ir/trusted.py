@@ -28,63 +28,65 @@ from typing import Any
 from pydantic import BaseModel
 
 # None: not decided (validate); True inside `ir.build`; False when a caller asks for validation.
-_TRUSTED: ContextVar[bool | None] = ContextVar("swarmgen_ir_trusted", default=None)
-_MISSING = object()
-# per class: its fields in declaration order, each with its default (or _MISSING)
-_FIELDS: dict[type[BaseModel], tuple[tuple[str, Any], ...]] = {}
+# `Node.__init__` reads it directly (one look-up per node).
+ACTIVE: ContextVar[bool | None] = ContextVar("swarmgen_ir_trusted", default=None)
+# per class: its field names in declaration order, the set of them, the optional ones' defaults
+_Spec = tuple[tuple[str, ...], frozenset[str], dict[str, Any]]
+_SPECS: dict[type[BaseModel], _Spec] = {}
+_set = object.__setattr__
 
 
 def active() -> bool:
     """Whether nodes made now skip validation (inside `by_builder`, not under `validated`)."""
-    return _TRUSTED.get() is True
+    return ACTIVE.get() is True
 
 
 @contextmanager
 def by_builder() -> Iterator[None]:
     """Nodes made in this block are built as they are (`ir.build`), unless `validated` is on."""
-    token = _TRUSTED.set(_TRUSTED.get() is not False)
+    token = ACTIVE.set(ACTIVE.get() is not False)
     try:
         yield
     finally:
-        _TRUSTED.reset(token)
+        ACTIVE.reset(token)
 
 
 @contextmanager
 def validated() -> Iterator[None]:
     """Every node made in this block is validated, `ir.build`'s included (the tests' check)."""
-    token = _TRUSTED.set(False)
+    token = ACTIVE.set(False)
     try:
         yield
     finally:
-        _TRUSTED.reset(token)
+        ACTIVE.reset(token)
 
 
 def construct(node: BaseModel, data: dict[str, Any]) -> None:
     """Fill `node` with `data` as `model_construct` would (defaults for the fields not given,
     the given ones as the fields set), refusing unknown and missing fields as validation does."""
     cls = type(node)
-    fields = _FIELDS.get(cls)
-    if fields is None:
-        fields = _FIELDS[cls] = _fields_of(cls)
-    values = {}
-    for name, default in fields:
-        value = data.get(name, default)
-        if value is _MISSING:
-            raise TypeError(f"{cls.__name__}: missing field {name!r}")
-        values[name] = value
-    if not data.keys() <= values.keys():
-        unknown = sorted(data.keys() - values.keys())
-        raise TypeError(f"{cls.__name__}: unknown fields {unknown}")
-    object.__setattr__(node, "__dict__", values)
-    object.__setattr__(node, "__pydantic_fields_set__", set(data))
-    object.__setattr__(node, "__pydantic_extra__", None)
-    object.__setattr__(node, "__pydantic_private__", None)
+    spec = _SPECS.get(cls)
+    if spec is None:
+        spec = _SPECS[cls] = _spec_of(cls)
+    names, known, defaults = spec
+    if not data.keys() <= known:
+        raise TypeError(f"{cls.__name__}: unknown fields {sorted(data.keys() - known)}")
+    try:
+        values = {name: data[name] if name in data else defaults[name] for name in names}
+    except KeyError as missing:
+        raise TypeError(f"{cls.__name__}: missing field {missing}") from None
+    _set(node, "__dict__", values)
+    _set(node, "__pydantic_fields_set__", set(data))
+    _set(node, "__pydantic_extra__", None)
+    _set(node, "__pydantic_private__", None)
 
 
-def _fields_of(cls: type[BaseModel]) -> tuple[tuple[str, Any], ...]:
-    found = []
+def _spec_of(cls: type[BaseModel]) -> _Spec:
+    defaults = {}
     for name, info in cls.model_fields.items():
         if info.default_factory is not None:
             raise TypeError(f"{cls.__name__}.{name}: a default factory is not built here")
-        found.append((name, _MISSING if info.is_required() else info.default))
-    return tuple(found)
+        if not info.is_required():
+            defaults[name] = info.default
+    names = tuple(cls.model_fields)
+    return names, frozenset(names), defaults
