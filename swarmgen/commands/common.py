@@ -3,7 +3,6 @@ common options, and how diagnostics are printed."""
 
 from __future__ import annotations
 
-import difflib
 import os
 import sys
 import traceback
@@ -136,6 +135,8 @@ class OutputChoice(click.Choice[str]):
         try:
             return str(super().convert(value, param, ctx))
         except click.BadParameter:
+            import difflib  # only for this message: not on every command's start-up
+
             close = difflib.get_close_matches(str(value), list(self.choices), n=1)
             also = f"; did you mean '{close[0]}'?" if close else ""
             choices = ", ".join(map(str, self.choices))
