@@ -54,6 +54,7 @@ __all__ = [
     "normalize_plain",
     "normalize_string",
     "plain_brackets",
+    "plain_pieces",
     "requote",
 ]
 
@@ -154,6 +155,17 @@ def plain_brackets(text: str) -> bool:
     """The brackets of `text` (plain, `_plain`) match and it has no magic trailing comma."""
     pieces = _STRINGS.split(text)
     return _plain_brackets(_PUNCTUATION.findall("0".join(pieces[::2])))
+
+
+def plain_pieces(text: str) -> list[str] | None:
+    """The pieces (code, string, code, ..., code) of a `text` that begins with no space, when
+    `normalize_plain` accepts it and `plain_brackets` holds; None otherwise. One reading of the
+    text for the three questions `pylayout` asks of each statement."""
+    plain = _plain(text)
+    if plain is None:
+        return None
+    pieces = plain[2]
+    return pieces if _plain_brackets(_PUNCTUATION.findall("0".join(pieces[::2]))) else None
 
 
 def requote(text: str) -> str:
