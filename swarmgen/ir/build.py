@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend.raw import RawModel
-from swarmgen.ir import acyclic, trusted
+from swarmgen.ir import acyclic
 from swarmgen.ir.build_classes import (
     class_ancestry,
     read_datatype,
@@ -35,13 +35,7 @@ from swarmgen.ir.nodes import (
 
 
 def build(raw: RawModel) -> tuple[Model, list[Diagnostic]]:
-    """Build the IR from the raw model; returns it with the diagnostics of resolution. Its
-    nodes are made without pydantic's validation (`ir.trusted`: every value has its type)."""
-    with trusted.by_builder():
-        return _build(raw)
-
-
-def _build(raw: RawModel) -> tuple[Model, list[Diagnostic]]:
+    """Build the IR from the raw model; returns it with the diagnostics of resolution."""
     b = Builder(raw)
     b.index_stereotypes()
     elements = list(raw.elements())

@@ -12,8 +12,8 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from swarmgen import fastnode
 from swarmgen.expr import Action, Binding, Expr
-from swarmgen.ir import trusted
 from swarmgen.span import Span
 
 Value = bool | int | float | str | None
@@ -22,17 +22,14 @@ DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
 
 
 class Node(BaseModel):
-    """The base of every IR node: frozen, no unknown fields. Validated when made, except by
-    `ir.build` (`ir.trusted`: it passes every field its declared type already); the
-    validators are built on first use, so a `validate` run never builds them."""
+    """The base of every IR node: frozen, no unknown fields. Made as validation makes it; the
+    pydantic validators are built on first need only (`swarmgen.fastnode`)."""
 
     model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True)
 
     def __init__(self, **data: Any) -> None:
-        """Validate `data` into the node, or take it as it is inside `trusted.by_builder`."""
-        if trusted.ACTIVE.get():
-            trusted.construct(self, data)
-        else:
+        """The node of `data`: as given when validation would keep it so, else validated."""
+        if not fastnode.fill(self, data):
             super().__init__(**data)
 
 
