@@ -94,6 +94,7 @@ def _plan_of(cls: type[BaseModel]) -> _Plan | None:
         or decorators.root_validators
         or decorators.validators
         or cls.model_post_init is not BaseModel.model_post_init
+        or cls.__private_attributes__
         or cls.model_config.get("extra") != "forbid"
         or cls.model_config.get("revalidate_instances", "never") != "never"
     ):
@@ -104,7 +105,10 @@ def _plan_of(cls: type[BaseModel]) -> _Plan | None:
             return None
         for name in decorator.info.fields:
             after.setdefault(name, []).append(decorator.func)
-    hints = typing.get_type_hints(cls, include_extras=True)
+    try:
+        hints = typing.get_type_hints(cls, include_extras=True)
+    except Exception:  # a name only a type checker sees: pydantic resolves or reports it
+        return None
     fields = []
     try:
         for name, info in cls.model_fields.items():
