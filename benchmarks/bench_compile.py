@@ -64,6 +64,7 @@ import synth_model  # noqa: E402  (a sibling script, not a package)
 class Sample:
     seconds: float
     peak_mb: float | None
+    cpu_s: float | None = None  # user + system of the command: what others' load adds least to
 
 
 def swarmgen() -> list[str]:
@@ -83,13 +84,15 @@ def run(args: list[str], cwd: Path) -> Sample:
     seconds = time.perf_counter() - start
     if done.returncode != 0:
         sys.exit(f"benchmark command failed ({done.returncode}): {' '.join(args)}\n{done.stderr}")
-    peak_mb = None
+    peak_mb = cpu_s = None
     if gnu_time:
         found = re.search(r"Maximum resident set size \(kbytes\): (\d+)", done.stderr)
         peak_mb = int(found.group(1)) / 1024 if found else None
+        used = re.findall(r"(?:User|System) time \(seconds\): ([0-9.]+)", done.stderr)
+        cpu_s = sum(float(u) for u in used) if len(used) == 2 else None
     else:  # ru_maxrss is in KiB on Linux: the largest child so far
         peak_mb = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    return Sample(seconds, peak_mb)
+    return Sample(seconds, peak_mb, cpu_s)
 
 
 def variants(work: Path) -> dict[str, list[str]]:
@@ -113,8 +116,10 @@ def compile_into_fresh_dir(model: Path, work: Path, options: list[str]) -> Sampl
 def summary(samples: list[Sample]) -> dict[str, Any]:
     times = [s.seconds for s in samples]
     values = [s.peak_mb for s in samples if s.peak_mb is not None]
+    cpu = [s.cpu_s for s in samples if s.cpu_s is not None]
     return {
         "median_s": statistics.median(times),
+        "cpu_median_s": statistics.median(cpu) if cpu else None,
         "p90_s": statistics.quantiles(times, n=10, method="inclusive")[8]
         if len(times) > 1
         else times[0],
@@ -183,6 +188,11 @@ def main(argv: list[str] | None = None) -> int:
             for n in sizes
         }
         verdicts["all"]["all_over_scxml"] = over
+        cpu = {n: [synthetic[str(n)][f"compile_{v}"]["cpu_median_s"] for v in ("all", "scxml")]
+               for n in sizes}  # fmt: skip
+        verdicts["all"]["all_over_scxml_cpu"] = {
+            str(n): a / b for n, (a, b) in cpu.items() if a is not None and b
+        }
         verdicts["all"]["met"]["all_over_scxml"] = all(
             r <= TARGETS["all_over_scxml"] for r in over.values()
         )
@@ -267,6 +277,9 @@ def figure(r: dict[str, Any], stem: Path) -> None:
         ax.plot(
             sizes, [times[0] * n / sizes[0] for n in sizes], ":", color=f"C{number}", linewidth=0.8
         )
+        cpu = [r["synthetic"][str(n)][f"compile_{name}"].get("cpu_median_s") for n in sizes]
+        if all(c is not None for c in cpu):
+            ax.plot(sizes, cpu, "x--", color=f"C{number}", label=f"{label}, CPU", markersize=4)
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.xaxis.set_major_locator(FixedLocator(sizes))
@@ -275,7 +288,7 @@ def figure(r: dict[str, Any], stem: Path) -> None:
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.yaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
     ax.set_xlabel("states (synthetic model)")
-    ax.set_ylabel("wall time, median (s)")
+    ax.set_ylabel("wall / CPU time, median (s)")
     ax.set_title("compile time against model size (dotted: linear)", fontsize=9)
     ax.grid(True, linewidth=0.3)
     ax.legend(fontsize=7)
@@ -299,6 +312,7 @@ def table(r: dict[str, Any]) -> str:
     for n in sizes:
         v = syn[str(n)]["validate"]
         rows.append((f"{n} states: validate, median", _s(v["median_s"]), ""))
+        rows.append((f"{n} states: validate, CPU median", _s(v.get("cpu_median_s")), ""))
     for name, options in r["compile_variants"].items():
         label = "compile " + " ".join(options) if options else "compile (all backends)"
         rows += _variant_rows(r, name, label, sizes, large)
@@ -336,6 +350,7 @@ def _variant_rows(
                 _s(c["median_s"]),
                 "< 5 s " + _ok(met["large_s"]) if is_large else "",
             ),
+            (f"{n} states: {label}, CPU (user + system), median", _s(c.get("cpu_median_s")), ""),
             (
                 f"{n} states: {label}, peak RSS",
                 _s(c["peak_mb"], "MB"),

@@ -20,7 +20,7 @@ from importlib import import_module
 
 import click
 
-from swarmgen import __version__, console
+from swarmgen import __version__, collector, console
 
 
 @dataclass(frozen=True)
@@ -151,6 +151,7 @@ def run() -> None:
     same); output is flushed first. The standard streams follow `swarmgen.console`: a reader
     that closes early ends nothing, a stdout that cannot be written is one error line (exit 2)."""
     console.install()
+    collector.process_ends_after_command()
     code: int
     try:
         main(standalone_mode=True)

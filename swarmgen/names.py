@@ -66,6 +66,10 @@ class IdAllocator:
 
     def __init__(self, taken: Iterable[str] = ()) -> None:
         self._taken = set(taken)
+        # per base: the last number handed out; every `base_2` .. `base_n` is taken (names are
+        # never given back), so the search for the next free one starts there, not at 2 (from
+        # 2 it was quadratic in the names sharing a base: thousands in a big diagram)
+        self._numbered: dict[str, int] = {}
 
     def claim(self, preferred: str, *alternatives: str) -> str:
         """The first free one of the names given, else the last one numbered (`_2`, `_3`, ...)."""
@@ -74,9 +78,10 @@ class IdAllocator:
                 self._taken.add(candidate)
                 return candidate
         base = alternatives[-1] if alternatives else preferred
-        n = 2
+        n = self._numbered.get(base, 2)
         while f"{base}_{n}" in self._taken:
             n += 1
+        self._numbered[base] = n
         self._taken.add(f"{base}_{n}")
         return f"{base}_{n}"
 

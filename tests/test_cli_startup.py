@@ -113,3 +113,34 @@ def test_the_commands_are_known_before_they_are_imported() -> None:
     assert all(name in main.commands for name in COMMANDS)
     assert "frobnicate" not in main.commands
     assert len(main.commands) == len(COMMANDS)
+
+
+COLLECTOR_PROBE = """
+import gc, sys
+from swarmgen import collector
+from swarmgen.cli import main
+if sys.argv[1] == "ends":
+    collector.process_ends_after_command()
+try:
+    main(["validate", "sample_models/patrol/patrol.xmi"])
+except SystemExit:
+    pass
+print(gc.isenabled())
+"""
+
+
+@pytest.mark.parametrize(("mode", "enabled"), [("ends", "False"), ("in-process", "True")])
+def test_batch_commands_leave_the_collector_on_unless_the_process_ends(
+    mode: str, enabled: str
+) -> None:
+    """`swarmgen.collector`: validate runs with the cyclic collector off; it stays off only when
+    the console entry point ends the process right after, so in-process callers get it back."""
+    done = subprocess.run(
+        [sys.executable, "-c", COLLECTOR_PROBE, mode],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+        check=True,
+    )
+    assert done.stdout.splitlines()[-1] == enabled, done.stderr

@@ -19,6 +19,7 @@ them: `pyknown`); every other statement is tokenized on its own.
 
 from __future__ import annotations
 
+import functools
 import io
 import re
 import tokenize
@@ -53,6 +54,7 @@ __all__ = [
     "normalize_plain",
     "normalize_string",
     "plain_brackets",
+    "plain_pieces",
     "requote",
 ]
 
@@ -155,6 +157,17 @@ def plain_brackets(text: str) -> bool:
     return _plain_brackets(_PUNCTUATION.findall("0".join(pieces[::2])))
 
 
+def plain_pieces(text: str) -> list[str] | None:
+    """The pieces (code, string, code, ..., code) of a `text` that begins with no space, when
+    `normalize_plain` accepts it and `plain_brackets` holds; None otherwise. One reading of the
+    text for the three questions `pylayout` asks of each statement."""
+    plain = _plain(text)
+    if plain is None:
+        return None
+    pieces = plain[2]
+    return pieces if _plain_brackets(_PUNCTUATION.findall("0".join(pieces[::2]))) else None
+
+
 def requote(text: str) -> str:
     """black's quote change over `text` whose every string is a plain one-line literal (as
     `normalize_plain` accepts), whatever its brackets or lines."""
@@ -169,10 +182,14 @@ def _requoted(pieces: list[str]) -> str:
     return "".join(pieces)
 
 
+@functools.lru_cache(maxsize=1 << 16)
 def quick_line(line: str) -> str | None:
     """`line` as the tokenized path prints it, when that is a copy with black's quote change
     (a whole statement on one line that fits, with only plain string literals and nothing black
-    rewrites); None when in doubt. `line` begins a statement and is no comment or blank line."""
+    rewrites); None when in doubt. `line` begins a statement and is no comment or blank line.
+    Memoised (in this process, bounded): the helper functions' lines are asked for when they
+    are laid out and again when each module that prints them is formatted, and the smach and
+    asyncio members print the same bodies."""
     plain = _plain(line) if len(line) <= LINE_LENGTH else None
     if plain is None:
         return None

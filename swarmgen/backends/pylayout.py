@@ -117,10 +117,9 @@ def layout(call: Call, depth: int) -> list[str] | None:
     `call` at `depth`; None when the statement is not in the forms reproduced here."""
     if not _CALLEE.fullmatch(call.callee) or keyword.iskeyword(call.callee.split(".")[0]):
         return None
-    text = flat(call)
-    if pyformat.normalize_plain(text) is None or not pyformat.plain_brackets(text):
-        return None
-    if not _plain_code(text):
+    text = flat(call)  # begins with the callee: no space before it
+    pieces = pyformat.plain_pieces(text)
+    if pieces is None or not _plain_shape(_DIGITS.sub("0", "@".join(pieces[::2]))):
         return None
     lines = _split("", call, "", depth, top=True)
     if lines is None:
@@ -130,9 +129,18 @@ def layout(call: Call, depth: int) -> list[str] | None:
     return pyformat.requote("\n".join(lines)).split("\n")
 
 
-def _plain_code(text: str) -> bool:
-    """The statement's code outside strings is in the narrow form black only re-quotes."""
-    code = "@".join(pyformat.STRINGS.split(text)[::2])
+# The statement's code outside strings (each literal read as `@`) must be in the narrow form
+# black only re-quotes (`_plain_shape`). Every run of digits is read as `0`: both patterns see
+# digits only through classes holding every digit and repeat them with `*`, so the shape
+# matches exactly when the code does. Statements differ mostly in their strings and numbers
+# (`_cond_12`), so a few dozen shapes cover a chart and `_REWRITTEN`'s scan (its lookbehinds
+# are tried at every position) runs once per shape.
+_DIGITS = re.compile(r"\d+")
+
+
+@functools.lru_cache(maxsize=4096)
+def _plain_shape(code: str) -> bool:
+    """The code of a statement (strings as `@`, digit runs as `0`) is in the narrow form."""
     return _ALLOWED.fullmatch(code) is not None and _REWRITTEN.search(code) is None
 
 

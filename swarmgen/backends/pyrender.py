@@ -273,10 +273,12 @@ class ChartRenderer:
         self._statement("b.transition", repr(source), events, targets, *options)
 
 
+@functools.lru_cache(maxsize=8192)
 def _unwrap(text: str) -> str:
     """`(a < b)` -> `a < b`: the outer parentheses go when they enclose the whole expression
     (then the text without them is an expression too, token for token; counting parentheses
-    would be fooled by those inside string literals)."""
+    would be fooled by those inside string literals). Memoised: the smach and the asyncio
+    members print the same guards and assignments, and `ast.parse` is the costly part."""
     if text.startswith("(") and text.endswith(")"):
         try:
             inner = ast.parse(text[1:-1], mode="eval")

@@ -26,7 +26,6 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import PurePosixPath
 from typing import Any
-from xml.sax.saxutils import escape
 
 from swarmgen.backends import Files, pycommon
 from swarmgen.backends.pycommon import common_view, member_view, package_name, script_specs
@@ -47,7 +46,7 @@ from swarmgen.backends.rclpy_parameters import (
 )
 from swarmgen.backends.vendor import ros_runtime_files, runtime_files
 from swarmgen.chart.model import BehaviourInfo, Chart
-from swarmgen.generated import header, markdown_cell
+from swarmgen.generated import header, markdown_cell, xml_text
 from swarmgen.ir.nodes import Model
 from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import doc_text, one_line, ros_name
@@ -479,4 +478,4 @@ def render_member(
 
 
 def _xml(text: str) -> str:
-    return escape(" ".join(one_line(text).split()))
+    return xml_text(" ".join(one_line(text).split()))

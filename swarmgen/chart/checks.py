@@ -68,11 +68,12 @@ def _chart(model: Model, chart: c.Chart) -> list[Diagnostic]:
     start = [leaf for target in chart.initial for leaf in graph.entry_leaves(target)]
     undefined = {d.id for d in chart.data if d.default is None}
     spans = _spans(model)
+    ids = _data_ids(chart)
     found = []
     for node in nodes.values():
         if node.call is None:
             continue
-        read = sorted({n for arg in node.call.args for n in _names(arg.value, chart)} & undefined)
+        read = sorted({n for arg in node.call.args for n in _names(arg.value, ids)} & undefined)
         for name in read:
             path = graph.path_without(start, node.id, name)
             if path is not None:
@@ -85,21 +86,25 @@ def _chart(model: Model, chart: c.Chart) -> list[Diagnostic]:
                         name=name,
                     )
                 )
-    return found + _unused_outputs(model, chart, nodes, spans)
+    return found + _unused_outputs(model, chart, nodes, spans, ids)
 
 
 def _unused_outputs(
-    model: Model, chart: c.Chart, nodes: dict[str, c.Node], spans: dict[str, Span]
+    model: Model,
+    chart: c.Chart,
+    nodes: dict[str, c.Node],
+    spans: dict[str, Span],
+    ids: dict[str, str],
 ) -> list[Diagnostic]:
     read: set[str] = set()
     for node in nodes.values():
         for transition in (*node.transitions, *([node.initial] if node.initial else [])):
             if transition.cond is not None:
-                read |= _names(transition.cond, chart)
-            read |= _action_reads(transition.actions, chart)
-        read |= _action_reads((*node.onentry, *node.onexit), chart)
+                read |= _names(transition.cond, ids)
+            read |= _action_reads(transition.actions, ids)
+        read |= _action_reads((*node.onentry, *node.onexit), ids)
         if node.call is not None:
-            read |= {n for arg in node.call.args for n in _names(arg.value, chart)}
+            read |= {n for arg in node.call.args for n in _names(arg.value, ids)}
     found = []
     reported: set[tuple[str, str]] = set()
     for node in nodes.values():
@@ -121,20 +126,24 @@ def _unused_outputs(
     return found
 
 
-def _names(e: expr.Expr, chart: c.Chart) -> set[str]:
-    ids = {d.name: d.id for d in chart.data}
+def _data_ids(chart: c.Chart) -> dict[str, str]:
+    """Member data id by name (made once per chart, not once per expression)."""
+    return {d.name: d.id for d in chart.data}
+
+
+def _names(e: expr.Expr, ids: dict[str, str]) -> set[str]:
     return {ids.get(n, n) for n in expr.free_names(e)}
 
 
-def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
+def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str]:
     read: set[str] = set()
     for action in actions:
         if isinstance(action, c.Assign):
-            read |= _names(action.value, chart)
+            read |= _names(action.value, ids)
         elif isinstance(action, c.Raise | c.Send):
             for param in action.params:
                 if not isinstance(param.value, c.FieldDefault):
-                    read |= _names(param.value, chart)
+                    read |= _names(param.value, ids)
     return read
 
 
@@ -163,6 +172,10 @@ class _Graph:
     def __init__(self, nodes: dict[str, c.Node], parents: dict[str, str]) -> None:
         self.nodes = nodes
         self.parents = parents
+        # what entering a node gives, by node id: made once, not once per leaf below an
+        # ancestor's transition (read only: callers make new sets and lists from them)
+        self._leaves: dict[str, list[str]] = {}
+        self._assigns: dict[str, set[str]] = {}
         self.edges: dict[str, list[_Edge]] = {}
         for leaf in (n for n in nodes.values() if not n.children or n.kind == "final"):
             self.edges[leaf.id] = self._leaf_edges(leaf)
@@ -174,6 +187,12 @@ class _Graph:
         return chain
 
     def entry_leaves(self, node_id: str) -> list[str]:
+        found = self._leaves.get(node_id)
+        if found is None:
+            found = self._leaves[node_id] = self._entry_leaves(node_id)
+        return found
+
+    def _entry_leaves(self, node_id: str) -> list[str]:
         node = self.nodes.get(node_id)
         if node is None:
             return []
@@ -187,6 +206,12 @@ class _Graph:
         return [node_id]
 
     def _entry_assigns(self, node_id: str) -> set[str]:
+        found = self._assigns.get(node_id)
+        if found is None:
+            found = self._assigns[node_id] = self._entry_assigns_of(node_id)
+        return found
+
+    def _entry_assigns_of(self, node_id: str) -> set[str]:
         assigned: set[str] = set()
         node = self.nodes.get(node_id)
         if node is None:

@@ -3,7 +3,6 @@ common options, and how diagnostics are printed."""
 
 from __future__ import annotations
 
-import difflib
 import os
 import sys
 import traceback
@@ -14,7 +13,7 @@ from typing import TYPE_CHECKING, Any, NoReturn, ParamSpec, TypeVar
 
 import click
 
-from swarmgen import __version__, console
+from swarmgen import __version__, collector, console
 from swarmgen.errors import SwarmgenError
 
 if TYPE_CHECKING:
@@ -49,6 +48,19 @@ def guarded(command: Callable[P, R]) -> Callable[P, R]:
             if _debug():
                 traceback.print_exc()
             sys.exit(INTERNAL_ERROR)
+
+    return wrapper
+
+
+def batch(command: Callable[P, R]) -> Callable[P, R]:
+    """A batch command (validate, compile, graph): run with the cyclic garbage collector off
+    (`swarmgen.collector`), its imports included."""
+
+    @wraps(command)
+    def wrapper(*args: P.args, **kwargs: P.kwargs) -> R:
+        """The command with the collector off."""
+        with collector.off_for_batch():
+            return command(*args, **kwargs)
 
     return wrapper
 
@@ -123,6 +135,8 @@ class OutputChoice(click.Choice[str]):
         try:
             return str(super().convert(value, param, ctx))
         except click.BadParameter:
+            import difflib  # only for this message: not on every command's start-up
+
             close = difflib.get_close_matches(str(value), list(self.choices), n=1)
             also = f"; did you mean '{close[0]}'?" if close else ""
             choices = ", ".join(map(str, self.choices))

@@ -20,6 +20,7 @@ from swarmgen.commands.common import (
     DeferredHelpOption,
     OutputChoice,
     PathType,
+    batch,
     check_codes,
     emit_diagnostics,
     fail,
@@ -66,6 +67,7 @@ def _backend_help() -> str:
 @FORMAT
 @STRICT
 @DISABLE
+@batch
 @guarded
 def compile_(
     model: Path,

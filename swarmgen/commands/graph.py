@@ -8,7 +8,7 @@ from pathlib import Path
 import click
 
 from swarmgen import console
-from swarmgen.commands.common import MODEL, PATH, emit_diagnostics, guarded
+from swarmgen.commands.common import MODEL, PATH, batch, emit_diagnostics, guarded
 
 # The pipeline and the diagnostics are imported in the command functions: `swarmgen --help` and
 # `swarmgen graph --help` must not load the compiler (docs/performance.md).
@@ -25,6 +25,7 @@ from swarmgen.commands.common import MODEL, PATH, emit_diagnostics, guarded
     "-o", "--output", type=PATH,
     help="Write one file per diagram into this directory (replaced atomically); else stdout.",
 )  # fmt: skip
+@batch
 @guarded
 def graph_(model: Path, member: str | None, diagram_format: str, output: Path | None) -> None:
     """Draw MODEL's state machines (one diagram each) and its swarm composition."""

@@ -17,6 +17,7 @@ from swarmgen.commands.common import (
     INTERFACES,
     PATH,
     STRICT,
+    batch,
     check_codes,
     guarded,
 )
@@ -36,6 +37,7 @@ Found = list[tuple[Path, list["dg.Diagnostic"]]]
 @FORMAT
 @STRICT
 @DISABLE
+@batch
 @guarded
 def validate(
     models: tuple[Path, ...],

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Collection, Iterator
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator
+
+from swarmgen import fastnode
 
 MAX_TEXT = 10_000
 MAX_DEPTH = 100
@@ -79,7 +81,13 @@ def _path(value: Expr) -> Expr:
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    # validators built on first need: most nodes never need them (`swarmgen.fastnode`)
+    model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True)
+
+    def __init__(self, /, **data: Any) -> None:
+        """The node of `data`: as given when validation would keep it so, else validated."""
+        if not fastnode.fill(self, data):
+            super().__init__(**data)
 
 
 class Const(_Model):
@@ -146,9 +154,6 @@ Expr = Annotated[
     Const | Name | EventField | Attr | Unary | Binary | Else, Field(discriminator="kind")
 ]
 Operand = Annotated[Expr, AfterValidator(_not_else)]
-
-for _cls in (Attr, Unary, Binary):
-    _cls.model_rebuild()
 
 
 class Arg(_Model):

@@ -37,9 +37,7 @@ class RawElement:
 
     @property
     def span(self) -> Span:
-        """Built on first use: most raw elements never need one. Validated construction is
-        the cheaper one here (pydantic-core checks five plain values faster than
-        `model_construct` assigns them in Python), and gives the same Span."""
+        """Built on first use: most raw elements never need one."""
         if self._span is None:
             self._span = Span(
                 file=self.file, line=self.line, col=self.col, xmi_id=self.id, path=self.path

@@ -62,7 +62,9 @@ class Builder:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     count: int = 0
     cursor: dict[int, int] = field(default_factory=dict)
-    columns: dict[int, int] = field(default_factory=dict)  # id(node) -> column
+    # by element, not id(element): lxml frees a proxy nobody holds, and a later element's proxy
+    # could get its id (and so its column); holding the element here keeps its proxy
+    columns: dict[etree._Element, int] = field(default_factory=dict)
 
     def span(self, node: etree._Element | None) -> Span:
         """The span of an SCXML element (line and column)."""
@@ -72,7 +74,7 @@ class Builder:
 
     def column(self, node: etree._Element) -> int:
         """lxml gives no columns: the tag's `<` on its line (left to right, as xmi.py does)."""
-        key = id(node)
+        key = node
         if key in self.columns:
             return self.columns[key]
         line = node_line(node) or 0

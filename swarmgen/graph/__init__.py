@@ -11,10 +11,13 @@ model order, safe ids, no timestamps (SVG: see `dot.svg`).
 from __future__ import annotations
 
 from pathlib import PurePosixPath
+from typing import TYPE_CHECKING
 
-from swarmgen.graph import dot, mermaid, structure, view
-from swarmgen.graph.dot import GraphvizError
+from swarmgen.graph import mermaid, structure, view
 from swarmgen.graph.view import GraphError
+
+if TYPE_CHECKING:
+    from swarmgen.graph.dot import GraphvizError
 from swarmgen.ir.nodes import Machine, MemberType, Model
 from swarmgen.ir.query import ModelIndex
 
@@ -50,6 +53,8 @@ def files(model: Model, fmt: str = "mermaid", member: str | None = None) -> File
             out[PurePosixPath(diagram.stem + mermaid.SUFFIX)] = mermaid.state_diagram(diagram)
         out[PurePosixPath(structure.COMPOSITION_STEM + mermaid.SUFFIX)] = mermaid.composition(comp)
         return out
+    from swarmgen.graph import dot  # Graphviz (subprocess): not for the Mermaid diagrams
+
     link = dot.SVG_SUFFIX if fmt == "svg" else dot.SUFFIX
     for diagram in diagrams:
         out[PurePosixPath(diagram.stem + dot.SUFFIX)] = dot.state_diagram(diagram, link)
@@ -57,3 +62,13 @@ def files(model: Model, fmt: str = "mermaid", member: str | None = None) -> File
     if fmt == "svg":
         return {path.with_suffix(dot.SVG_SUFFIX): dot.svg(text) for path, text in out.items()}
     return out
+
+
+def __getattr__(name: str) -> object:
+    """`GraphvizError`, from `graph.dot`, imported when first asked for (compile's Mermaid
+    diagrams do not need Graphviz's module)."""
+    if name == "GraphvizError":
+        from swarmgen.graph.dot import GraphvizError
+
+        return GraphvizError
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

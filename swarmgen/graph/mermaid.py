@@ -24,6 +24,8 @@ _SAFE = frozenset(
     "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789 _.,=+-*/()!?'@$^~"
 )
 _NAMED = {"\n": "#10;", "\r": "#13;", "\t": "#9;"}
+# A text made only of `_SAFE` characters (most labels) is kept as it is, without the loop.
+_ALL_SAFE = re.compile("[" + re.escape("".join(sorted(_SAFE))) + "]*")
 # Words the state-diagram lexer matches wherever a statement starts, whatever follows.
 _KEYWORDS = ("default", "state", "note", "class", "scale", "hide", "acc", "style", "click", "href",
              "end")  # fmt: skip
@@ -45,6 +47,8 @@ HARDWARE_CLASSES = {
 
 def text(raw: str) -> str:
     """Model text for a quoted label or a description: entity codes for everything unsafe."""
+    if _ALL_SAFE.fullmatch(raw):
+        return _DIRECTION.sub(lambda m: f"#{ord(m.group()[0])};{m.group()[1:]}", raw)
     out = []
     for ch in raw:
         if ch in _SAFE or (ord(ch) > 127 and ch.isprintable()):

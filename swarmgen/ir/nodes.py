@@ -8,10 +8,11 @@ hashable and comparable in tests. References between nodes are by `id` (the xmi:
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from swarmgen import fastnode
 from swarmgen.expr import Action, Binding, Expr
 from swarmgen.span import Span
 
@@ -21,9 +22,15 @@ DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
 
 
 class Node(BaseModel):
-    """The base of every IR node: frozen, no unknown fields."""
+    """The base of every IR node: frozen, no unknown fields. Made as validation makes it; the
+    pydantic validators are built on first need only (`swarmgen.fastnode`)."""
 
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", defer_build=True)
+
+    def __init__(self, **data: Any) -> None:
+        """The node of `data`: as given when validation would keep it so, else validated."""
+        if not fastnode.fill(self, data):
+            super().__init__(**data)
 
 
 # --- data
@@ -346,7 +353,3 @@ class Model(Node):
     events: tuple[Event, ...]
     machines: tuple[Machine, ...]
     uses_profile: bool  # any swarm-profile stereotype applied: the stricter rules apply
-
-
-State.model_rebuild()
-Region.model_rebuild()
