@@ -22,7 +22,11 @@ CLEAN_CASES = sorted((ROOT / "tests" / "check_cases").glob("*.xmi"))
 
 def _without_spans(node: Any) -> Any:
     if isinstance(node, dict):
-        return {k: _without_spans(v) for k, v in node.items() if k not in {"span", "source"}}
+        return {
+            k: _without_spans(v)
+            for k, v in node.items()
+            if k not in {"span", "source"} and not k.endswith("_span")
+        }
     if isinstance(node, list):
         return [_without_spans(v) for v in node]
     return node
