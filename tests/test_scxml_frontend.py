@@ -121,8 +121,18 @@ BAD = {
     "if": (_doc('<state id="A"><onentry><if cond="true"/></onentry></state>'), "SG060", 2),
     "invoke": (_doc('<state id="A"><invoke type="http"/></state>'), "SG060", 2),
     "script": (_doc('<script>x = 1;</script>\n<state id="A"/>'), "SG060", 2),
-    "send-delay": (
-        _doc('<state id="A"><onentry><send event="e" delay="1s"/></onentry></state>'),
+    "send-external-target": (
+        _doc('<state id="A"><onentry><send event="e" target="http://a/b"/></onentry></state>'),
+        "SG060",
+        2,
+    ),
+    "send-bad-delay": (
+        _doc('<state id="A"><onentry><send event="e" delay="soon"/></onentry></state>'),
+        "SG060",
+        2,
+    ),
+    "cancel-sendidexpr": (
+        _doc('<state id="A"><onentry><cancel sendidexpr="x"/></onentry></state>'),
         "SG060",
         2,
     ),

@@ -211,8 +211,21 @@ class ChartRenderer:
         if isinstance(action, c.Raise | c.Send):
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
-            return [f"ctx.{method}({action.event!r}, {data if action.params else 'None'})"]
+            data = data if action.params else "None"
+            if isinstance(action, c.Raise) and action.delay is not None:
+                return [self._delayed(action, action.delay, data)]
+            return [f"ctx.{method}({action.event!r}, {data})"]
+        if isinstance(action, c.Cancel):
+            return [f"ctx.cancel({action.sendid!r})"]
         return [f"ctx.opaque({action.language!r}, {action.text!r})"]
+
+    def _delayed(self, action: c.Raise, delay: c.Delay, data: str) -> str:
+        """`raise e after ...` with its delay in milliseconds."""
+        amount = _unwrap(self.py(delay.amount))
+        ms = {"ms": amount, "s": f"({amount}) * 1000", "": f"ctx.duration({amount})"}[delay.unit]
+        if delay.unit == "s" and isinstance(delay.amount, expr.Const):
+            ms = f"{amount} * 1000"
+        return f"ctx.raise_later({action.event!r}, {data}, {ms}, {action.sendid!r})"
 
     def _hooks(self, node: c.Node) -> list[str]:
         """The `onentry=` and `onexit=` options of a state (its action functions, if any)."""

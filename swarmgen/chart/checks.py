@@ -132,6 +132,8 @@ def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
         if isinstance(action, c.Assign):
             read |= _names(action.value, chart)
         elif isinstance(action, c.Raise | c.Send):
+            if isinstance(action, c.Raise) and action.delay is not None:
+                read |= _names(action.delay.amount, chart)
             for param in action.params:
                 if not isinstance(param.value, c.FieldDefault):
                     read |= _names(param.value, chart)

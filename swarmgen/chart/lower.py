@@ -16,6 +16,7 @@ Lowering decides everything the outputs share (documented in docs/scxml.md):
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TypeGuard
 
 from swarmgen import expr
 from swarmgen.chart import model as c
@@ -341,9 +342,14 @@ class _Lowering(Transitions):
         for machine in self.index.reachable_machines(self.root):
             for transition in machine.transitions:
                 names.update(t.name for t in transition.triggers if t.kind == TriggerKind.EVENT)
-                names.update(a.event for a in transition.effect if not isinstance(a, expr.Assign))
+                names.update(a.event for a in transition.effect if _names_event(a))
             for placed in walk(machine):
                 if isinstance(placed.vertex, State):
                     actions = (*placed.vertex.entry, *placed.vertex.exit)
-                    names.update(a.event for a in actions if not isinstance(a, expr.Assign))
+                    names.update(a.event for a in actions if _names_event(a))
         return [e for e in self.index.model.events if e.name in names]
+
+
+def _names_event(action: expr.Action) -> TypeGuard[expr.Raise | expr.Send]:
+    """Whether the action raises or sends an event (an assignment or `cancel` names none)."""
+    return isinstance(action, expr.Raise | expr.Send)

@@ -38,11 +38,29 @@ class Param:
 
 
 @dataclass(frozen=True, slots=True)
+class Delay:
+    """When a delayed raise arrives: `amount` in `unit` (ms, s; "": a duration string)."""
+
+    amount: expr.Expr
+    unit: str
+
+
+@dataclass(frozen=True, slots=True)
 class Raise:
-    """An event for this member only (internal queue)."""
+    """An event for this member only: the internal queue; with a delay, its external queue
+    once the delay is over (unless cancelled by its send id first)."""
 
     event: str
     params: tuple[Param, ...] = ()
+    delay: Delay | None = None
+    sendid: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Cancel:
+    """Drop the pending delayed raises of a send id."""
+
+    sendid: str
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,7 +79,7 @@ class Opaque:
     text: str
 
 
-Action = Assign | Raise | Send | Opaque
+Action = Assign | Raise | Send | Cancel | Opaque
 
 
 @dataclass(frozen=True, slots=True)

@@ -245,9 +245,20 @@ class Transitions(Context):
             if isinstance(action, expr.Assign):
                 lowered.append(c.Assign(self._data_ident(action.target), action.value))
                 continue
+            if isinstance(action, expr.Cancel):
+                lowered.append(c.Cancel(action.sendid))
+                continue
             params = self._params(action.event, action.args)
             if isinstance(action, expr.Raise):
-                lowered.append(c.Raise(self._event_ident(action.event), params))
+                delay = action.delay
+                lowered.append(
+                    c.Raise(
+                        self._event_ident(action.event),
+                        params,
+                        c.Delay(delay.amount, delay.unit) if delay is not None else None,
+                        action.sendid,
+                    )
+                )
             else:
                 lowered.append(c.Send(self._event_ident(action.event), params))
         lowered += [c.Opaque(code.language or "unspecified", code.body) for code in opaque]
@@ -269,9 +280,4 @@ class Transitions(Context):
 
 
 def _read_outputs(action: expr.Action, outputs: dict[str, str]) -> expr.Action:
-    if isinstance(action, expr.Assign):
-        return action.model_copy(update={"value": expr.replace_fields(action.value, outputs)})
-    args = tuple(
-        a.model_copy(update={"value": expr.replace_fields(a.value, outputs)}) for a in action.args
-    )
-    return action.model_copy(update={"args": args})
+    return expr.map_action(action, lambda e: expr.replace_fields(e, outputs))

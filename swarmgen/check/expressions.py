@@ -117,8 +117,10 @@ def _actions(
                 found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
-        for arg in action.args:
-            found.extend(_names(arg.value, scope, fields, span, what))
+        if isinstance(action, expr.Cancel):
+            continue
+        for value in expr.action_exprs(action):
+            found.extend(_names(value, scope, fields, span, what))
         found.extend(_event_use(index, action, span, what))
     return found
 

@@ -281,7 +281,7 @@ class _Run:
         step bound (a loop that never ends its macrostep never lets it be taken either)."""
         found = []
         for action in actions:
-            if isinstance(action, expr.Raise) and not action.args:
+            if isinstance(action, expr.Raise) and not action.args and action.delay is None:
                 event = self.index.events_by_name.get(action.event)
                 if event is None or not event.fields:
                     found.append(event.ident if event is not None else identifier(action.event))

@@ -234,6 +234,16 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
                 f"'{action.target}' is {_word(target or '')}, assigned {_word(value or '')}"
             )
         return
+    if isinstance(action, expr.Cancel):
+        return
+    if isinstance(action, expr.Raise) and action.delay is not None:
+        amount = typer.infer(action.delay.amount)
+        wanted = "string" if not action.delay.unit else "number"
+        if amount is not None and amount != wanted:
+            needs = "a duration string" if not action.delay.unit else "a number"
+            typer.errors.append(
+                f"the delay of '{action.event}' is {_word(amount)}, it needs {needs}"
+            )
     event = index.events_by_name.get(action.event)
     fields = {f.name: of(f, datatypes) for f in (event.fields if event else ())}
     for arg in action.args:

@@ -23,7 +23,10 @@ from swarmgen.expr.tree import (
     Binary,
     Binding,
     BinOp,
+    Cancel,
     Const,
+    Delay,
+    DelayUnit,
     Else,
     EventField,
     Expr,
@@ -47,7 +50,10 @@ _CONSTANTS: dict[str, Value] = {
 _COMPOUND = frozenset({"+=", "-=", "*=", "/=", "%="})
 # Operators borrowed from Java/C/ECMAScript that get a message of their own.
 _EXPLAINED = _COMPOUND | {"++", "--", "===", "!==", "**", "//"}
-_NOT_ACTION = "an action must be `name = expression`, `raise <event>(...)` or `send <event>(...)`"
+_NOT_ACTION = (
+    "an action must be `name = expression`, `raise <event>(...)`, `send <event>(...)` or "
+    "`cancel <name>`"
+)
 _NOT_BINDING = "a binding must be `name = expression`"
 
 # A parsed expression together with its depth: the depth limit keeps the recursive renderers
@@ -315,17 +321,29 @@ class _Parser:
             if not self.at_end_of_statement():
                 self.unexpected(self.peek())
 
-    def action(self) -> Assign | Raise | Send:
+    def action(self) -> Assign | Raise | Send | Cancel:
         tok = self.peek()
         # `send = 1` assigns member data named `send`
         if (
             tok.kind == "word"
-            and tok.text in ("raise", "send")
+            and tok.text in ("raise", "send", "cancel")
             and not self.is_op("=", self.peek(1))
         ):
-            return self.event_action()
+            return self.cancel() if tok.text == "cancel" else self.event_action()
         target, value = self.assignment(_NOT_ACTION)
         return Assign(target=target, value=value)
+
+    def cancel(self) -> Cancel:
+        self.advance()
+        name = self.peek()
+        if name.kind != "word" or name.text in RESERVED:
+            self.fail(
+                name,
+                "expected the send id after 'cancel'",
+                hint="`raise e after 1 s as t` then `cancel t`",
+            )
+        self.advance()
+        return Cancel(sendid=name.text)
 
     def assignment(self, what: str) -> tuple[str, Expr]:
         start = self.peek()
@@ -348,9 +366,44 @@ class _Parser:
             self.fail(name, f"expected an event name after '{verb.text}'")
         self.advance()
         args = self.arguments() if self.is_op("(", self.peek()) else ()
-        if verb.text == "raise":
-            return Raise(event=name.text, args=args)
-        return Send(event=name.text, args=args)
+        after = self.peek()
+        if not self.is_word("after", after):
+            return (
+                Raise(event=name.text, args=args)
+                if verb.text == "raise"
+                else Send(event=name.text, args=args)
+            )
+        if verb.text != "raise":
+            self.fail(
+                after,
+                "only `raise` can be delayed",
+                hint="delay a `raise` to this member, and `send` from the transition it takes",
+            )
+        self.advance()
+        delay = self.delay()
+        sendid = None
+        if self.is_word("as", self.peek()):
+            self.advance()
+            tok = self.peek()
+            if tok.kind != "word" or tok.text in RESERVED:
+                self.fail(tok, "expected a send id after 'as'", hint="`raise e after 1 s as t`")
+            self.advance()
+            sendid = tok.text
+        return Raise(event=name.text, args=args, delay=delay, sendid=sendid)
+
+    @staticmethod
+    def is_word(text: str, tok: Tok) -> bool:
+        return tok.kind == "word" and tok.text == text
+
+    def delay(self) -> Delay:
+        """`after <amount> ms|s`, or `after <amount>` with a duration string's value."""
+        amount, _ = self.expr(0)
+        unit: DelayUnit = ""
+        tok = self.peek()
+        if tok.kind == "word" and tok.text in ("ms", "s"):
+            self.advance()
+            unit = "ms" if tok.text == "ms" else "s"
+        return Delay(amount=amount, unit=unit)
 
     def arguments(self) -> tuple[Arg, ...]:
         opening = self.advance()

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Iterator
+from collections.abc import Callable, Collection, Iterator
 from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator
@@ -173,12 +173,27 @@ class Assign(_Model):
     value: Operand
 
 
+DelayUnit = Literal["ms", "s", ""]
+
+
+class Delay(_Model):
+    """``after <amount> <unit>`` of a delayed ``raise``: milliseconds or seconds, or no unit,
+    when the amount's value is a duration string (``"1.5s"``, ``"200ms"``: SCXML's
+    ``delayexpr``)."""
+
+    amount: Operand
+    unit: DelayUnit = "ms"
+
+
 class Raise(_Model):
-    """Raise an event for this member only."""
+    """Raise an event for this member only; with a delay, it arrives after it (W3C: a delayed
+    `<send>` to the session's own external queue), cancellable by its send id."""
 
     kind: Literal["raise"] = "raise"
     event: Ident
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
+    delay: Delay | None = None
+    sendid: Ident | None = None  # `as <name>`: what `cancel <name>` names
 
 
 class Send(_Model):
@@ -189,7 +204,14 @@ class Send(_Model):
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
 
 
-Action = Annotated[Assign | Raise | Send, Field(discriminator="kind")]
+class Cancel(_Model):
+    """``cancel <name>``: drop the delayed events raised `as <name>` that are still pending."""
+
+    kind: Literal["cancel"] = "cancel"
+    sendid: Ident
+
+
+Action = Annotated[Assign | Raise | Send | Cancel, Field(discriminator="kind")]
 
 
 class Binding(_Model):
@@ -265,14 +287,42 @@ def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
 
 def resolve_action_enums(action: Action, enums: Collection[str]) -> Action:
     """An action with its enumeration literals resolved (`resolve_enums`)."""
+    return map_action(action, lambda e: resolve_enums(e, enums))
+
+
+def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
+    """The action with `rewrite` applied to each expression it holds (itself when none
+    changes)."""
+    if isinstance(action, Cancel):
+        return action
     if isinstance(action, Assign):
-        value = resolve_enums(action.value, enums)
+        value = rewrite(action.value)
         return action if value is action.value else Assign(target=action.target, value=value)
-    values = [resolve_enums(a.value, enums) for a in action.args]
-    if all(v is a.value for v, a in zip(values, action.args, strict=True)):
+    values = [rewrite(a.value) for a in action.args]
+    delay = action.delay if isinstance(action, Raise) else None
+    amount = rewrite(delay.amount) if delay is not None else None
+    if all(v is a.value for v, a in zip(values, action.args, strict=True)) and (
+        delay is None or amount is delay.amount
+    ):
         return action
     args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
-    return type(action)(event=action.event, args=args)
+    if isinstance(action, Send):
+        return Send(event=action.event, args=args)
+    if delay is not None and amount is not None:
+        delay = Delay(amount=amount, unit=delay.unit)
+    return Raise(event=action.event, args=args, delay=delay, sendid=action.sendid)
+
+
+def action_exprs(action: Action) -> tuple[Expr, ...]:
+    """The expressions an action evaluates, in evaluation order."""
+    if isinstance(action, Cancel):
+        return ()
+    if isinstance(action, Assign):
+        return (action.value,)
+    found = tuple(a.value for a in action.args)
+    if isinstance(action, Raise) and action.delay is not None:
+        found = (action.delay.amount, *found)
+    return found
 
 
 def free_names(expr: Expr) -> frozenset[str]:

@@ -3,6 +3,7 @@ triggers (the reverse of docs/scxml.md's mapping), with a located diagnostic for
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -21,7 +22,6 @@ _NOT_IN_IR = {
     "foreach": "loops are not in the IR yet",
     "log": "logging is not in the IR yet",
     "script": "scripts other than swarmgen's $sg support script are not run",
-    "cancel": "only the timer pattern's <cancel> (docs/scxml.md) is read",
     "invoke": "invoking other sessions is not in the IR",
 }
 
@@ -155,6 +155,8 @@ class Actions:
             return [f"raise {self.event_name(str(node.get('event', '')))}"]
         if tag == "send":
             return self.internal_send(node)
+        if tag == "cancel":
+            return self.cancel(node)
         self.b.report(
             dg.SCXML_UNSUPPORTED,
             node,
@@ -164,26 +166,61 @@ class Actions:
         return []
 
     def internal_send(self, node: etree._Element) -> list[str]:
-        """`<send target="#_internal">`: a raise with data; any other send is reported."""
-        extra = [
-            a
-            for a in (
-                "delay",
-                "delayexpr",
-                "type",
-                "typeexpr",
-                "targetexpr",
-                "eventexpr",
-                "namelist",
-                "idlocation",
-            )
-            if node.get(a) is not None
-        ]
-        if node.get("target") != "#_internal" or extra or children(node, "content"):
-            why = 'only <send target="#_internal"> with <param>s (a raise with data) and the timer pattern are read'
+        """`<send>` to this session: `#_internal` without a delay is a raise with data; with a
+        delay, or without a target (the session's external queue), a delayed raise (`after 0
+        ms` without a delay); any other send is reported."""
+        why = _unread_send(node)
+        if why is not None:
             self.b.report(dg.SCXML_UNSUPPORTED, node, element="send", why=why)
             return []
-        return self.event_action(node, "raise", children(node, "param"))
+        lines = self.event_action(node, "raise", children(node, "param"))
+        delayed = node.get("target") is None or {"delay", "delayexpr"} & set(node.attrib)
+        if not lines or not delayed:
+            return lines
+        delay = self.delay(node)
+        if delay is None:
+            return []
+        sendid = node.get("id")
+        return [f"{lines[0]} after {delay}" + (f" as {sendid}" if sendid else "")]
+
+    def delay(self, node: etree._Element) -> str | None:
+        """The `after` of a delayed send: `N ms`/`N s` from `delay`, an expression from
+        `delayexpr` (swarmgen's own `$sg.delay(e, scale)` and `$sg.duration(e)` read back)."""
+        literal, source = node.get("delay"), node.get("delayexpr")
+        if source is None:
+            found = _LITERAL_DELAY.fullmatch(literal or "0ms")
+            if found is None:
+                self.b.report(
+                    dg.SCXML_UNSUPPORTED,
+                    node,
+                    "attribute",
+                    attribute="delay",
+                    value=str(literal)[:200],
+                    element="send",
+                    why="a delay is a number of ms or s (`500ms`, `1.5s`)",
+                )
+                return None
+            return f"{found.group(1)} {found.group(2)}"
+        own = _OWN_DELAY.fullmatch(source)
+        if own is not None:
+            inner = self.text(own.group(1) or own.group(3), node)
+            unit = "" if own.group(2) is None else (" s" if own.group(2) == "1000" else " ms")
+            return f"({inner}){unit}" if inner is not None else None
+        text = self.text(source, node)
+        return f"({text})" if text is not None else None
+
+    def cancel(self, node: etree._Element) -> list[str]:
+        """`<cancel sendid>`: `cancel id` (the timer pattern's is read with its state)."""
+        sendid = node.get("sendid")
+        if sendid is None or not sendid.isidentifier() or sendid.startswith("__"):
+            self.b.report(
+                dg.SCXML_UNSUPPORTED,
+                node,
+                element="cancel",
+                why="swarmgen cancels by a literal sendid that is an identifier",
+            )
+            return []
+        return [f"cancel {sendid}"]
 
     def event_action(
         self, node: etree._Element, verb: str, params: list[etree._Element]
@@ -283,3 +320,22 @@ class Actions:
                 name = self.event_name(event.removesuffix(".*"))
                 found.append((name, self.event_ref(name)))
         return found
+
+
+_LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
+# what swarmgen's emitter writes for a computed delay (docs/scxml.md)
+_OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
+_PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
+_UNREAD_SEND = ("typeexpr", "targetexpr", "eventexpr", "namelist", "idlocation")
+
+
+def _unread_send(node: etree._Element) -> str | None:
+    """Why swarmgen does not read this `<send>`, or None."""
+    target, sendid = node.get("target"), node.get("id")
+    if target not in (None, "#_internal") or node.get("type") not in (None, _PROCESSOR):
+        return "a send to another target or I/O processor is not in the IR"
+    if any(node.get(a) is not None for a in _UNREAD_SEND) or children(node, "content"):
+        return "typeexpr, targetexpr, eventexpr, namelist, idlocation and <content> are not in the IR yet"
+    if sendid is not None and (not sendid.isidentifier() or sendid.startswith("__")):
+        return "a send id is an identifier"
+    return None

@@ -33,7 +33,17 @@ def action_text(action: expr.Action) -> str:
         case expr.Raise() | expr.Send():
             verb = "raise" if isinstance(action, expr.Raise) else "send"
             args = f"({_args_text(action.args)})" if action.args else ""
-            return f"{verb} {action.event}{args}"
+            return f"{verb} {action.event}{args}{_delay_text(action)}"
+        case expr.Cancel():
+            return f"cancel {action.sendid}"
+
+
+def _delay_text(action: expr.Raise | expr.Send) -> str:
+    if not isinstance(action, expr.Raise) or action.delay is None:
+        return ""
+    unit = f" {action.delay.unit}" if action.delay.unit else ""
+    named = f" as {action.sendid}" if action.sendid else ""
+    return f" after {expr.to_text(action.delay.amount)}{unit}{named}"
 
 
 def actions_text(actions: Iterable[expr.Action], opaque: Iterable[ir.OpaqueCode]) -> str:

@@ -94,6 +94,25 @@ $sg.spin = function () {{
   return false;
 }};
 """
+# Delays computed at run time (`raise e after n s`), only in a document that has one: a delay
+# must be a number of at least 0 (in ms or s) or a duration string, else the `<send>` raises
+# error.execution and sends nothing, as the engine does (`Engine.raise_delayed`,
+# `runtime.chart.duration_ms`).
+DELAY_SCRIPT = r"""
+$sg.delay = function (v, scale) {
+  if (typeof v !== "number" || !(v >= 0) || v === Infinity) {
+    throw new TypeError("the delay " + v + " is not a duration");
+  }
+  return Math.round(v * scale) + "ms";
+};
+$sg.duration = function (v) {
+  var m = (typeof v === "string") ? /^\s*(\d+(\.\d*)?|\.\d+)(ms|s)\s*$/.exec(v) : null;
+  if (m === null) {
+    throw new TypeError("the delay " + v + " is not a duration such as '2s' or '500ms'");
+  }
+  return Math.round(parseFloat(m[1]) * (m[3] === "s" ? 1000 : 1)) + "ms";
+};
+"""
 TICK = "$sg.tick(_event)"
 SPIN = "$sg.spin()"
 
@@ -129,7 +148,10 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
     bounded = any(t.bounded for n in chart.walk() for t in n.transitions)
     writer = _Writer({d.name: d.id for d in chart.data}, {d.id: d for d in chart.data}, bounded)
     writer.datamodel(scxml, chart.data)
-    _sub(scxml, "script").text = SUPPORT_SCRIPT + (STEP_SCRIPT if bounded else "")
+    delays = any(_computed_delay(a) for n in chart.walk() for a in _actions_of(n))
+    _sub(scxml, "script").text = (
+        SUPPORT_SCRIPT + (STEP_SCRIPT if bounded else "") + (DELAY_SCRIPT if delays else "")
+    )
     for node in chart.children:
         writer.node(scxml, node)
     _metadata(scxml, chart)
@@ -330,6 +352,8 @@ class _Writer:
         for action in actions:
             if isinstance(action, c.Assign):
                 _sub(parent, "assign", {"location": action.location, "expr": self.js(action.value)})
+            elif isinstance(action, c.Raise) and action.delay is not None:
+                self.params(self.delayed(parent, action, action.delay), action.params, "param")
             elif isinstance(action, c.Raise) and not action.params:
                 _sub(parent, "raise", {"event": action.event})
             elif isinstance(action, c.Raise):
@@ -341,8 +365,27 @@ class _Writer:
             elif isinstance(action, c.Send):
                 send = _sub(parent, _sg("send"), {"event": action.event, "scope": "swarm"})
                 self.params(send, action.params, _sg("param"))
+            elif isinstance(action, c.Cancel):
+                _sub(parent, "cancel", {"sendid": action.sendid})
             else:
                 _sub(parent, _sg("opaque"), {"language": action.language}).text = action.text
+
+    def delayed(self, parent: etree._Element, action: c.Raise, delay: c.Delay) -> etree._Element:
+        """`raise e after ...`: a `<send>` without target (the session's external queue)
+        with a literal `delay` when the delay is a constant, else a `delayexpr`."""
+        attrs = {"event": action.event}
+        amount = delay.amount
+        literal = _literal_ms(delay)
+        if literal is not None:  # Qt SCXML reads a literal delay in whole units only
+            attrs["delay"] = f"{literal}ms"
+        elif delay.unit:
+            scale = "1000" if delay.unit == "s" else "1"
+            attrs["delayexpr"] = f"$sg.delay({self.js(amount)}, {scale})"
+        else:
+            attrs["delayexpr"] = f"$sg.duration({self.js(amount)})"
+        if action.sendid is not None:
+            attrs["id"] = action.sendid
+        return _sub(parent, "send", attrs)
 
     def params(self, send: etree._Element, params: tuple[c.Param, ...], tag: str) -> None:
         for param in params:
@@ -398,3 +441,31 @@ def _behaviour(library: etree._Element, behaviour: c.BehaviourInfo) -> None:
     for tag, params in (("input", behaviour.inputs), ("output", behaviour.outputs)):
         for name, type_ in params:
             _sub(element, _sg(tag), {"name": name, **({"type": type_} if type_ else {})})
+
+
+def _literal_ms(delay: c.Delay) -> int | None:
+    """A constant delay as whole milliseconds, else None (the support script computes it)."""
+    value = delay.amount.value if isinstance(delay.amount, expr.Const) else None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not delay.unit:
+        return None
+    ms = value * (1000 if delay.unit == "s" else 1)
+    return int(ms) if ms >= 0 and ms == int(ms) else None
+
+
+def _computed_delay(action: c.Action) -> bool:
+    """Whether the action is a delayed raise whose delay the support script computes."""
+    return (
+        isinstance(action, c.Raise)
+        and action.delay is not None
+        and _literal_ms(action.delay) is None
+    )
+
+
+def _actions_of(node: c.Node) -> list[c.Action]:
+    """Every action of a node: entry, exit, its initial transition's and its transitions'."""
+    found = [*node.onentry, *node.onexit]
+    if node.initial is not None:
+        found += node.initial.actions
+    for transition in node.transitions:
+        found += transition.actions
+    return found

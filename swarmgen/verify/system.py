@@ -86,7 +86,7 @@ class Step:
     """One step: its kind, the member (index in the state's order), the event or outcome and
     the state whose behaviour or timer it is."""
 
-    kind: str  # "station", "deliver", "outcome", "emit", "timer"
+    kind: str  # "station", "deliver", "outcome", "emit", "timer", "delayed" (state: its key)
     member: int = -1
     event: str = ""
     state: str = ""
@@ -230,6 +230,8 @@ class System:
                     Step("emit", index, e, state_id) for e in kind.emits.get(call.behaviour, ())
                 )
         found.extend(Step("timer", index, event, state_id) for state_id, event in engine.timers)
+        arriving = dict.fromkeys((key, name) for key, name, _ in engine.delayed)
+        found.extend(Step("delayed", index, name, key) for key, name in arriving)
         return found
 
     def quiescent(self, state: SwarmState) -> bool:
@@ -335,6 +337,8 @@ class System:
         else:
             if kind == "timer":
                 host.cancel_timer(member_kind.chart.nodes[state_id], name)  # it fired
+            if kind == "delayed":
+                data = host.arrived(state_id, name)
             value = thaw(data)
             event = Event(name, value, 0, 0.0, "verify")
             replayed = {"event": name} if value is None else {"event": name, "data": value}

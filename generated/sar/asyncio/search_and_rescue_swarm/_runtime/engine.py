@@ -56,6 +56,7 @@ class Engine:
         self._to_invoke: set[Node] = set()
         self._activation: dict[Node, int] = {}
         self._ids = itertools.count(1)
+        self._sends = 0  # delayed raises without a send id so far (their keys: `send.<n>`)
         self._events = self.chart.events
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
@@ -153,6 +154,26 @@ class Engine:
     def send_swarm(self, name: str, data: Mapping[str, Any] | None) -> None:
         """`send e`: the event goes to the swarm, through the host."""
         self.host.send_swarm(self.make_event(name, data, self.member_id))
+
+    def raise_delayed(
+        self, name: str, data: Mapping[str, Any] | None, delay_ms: Any, sendid: str | None
+    ) -> None:
+        """`raise e after N ms [as id]`: the host delivers it to this member's external queue
+        after the delay (W3C: a delayed `<send>` to the session itself). It arrives as an input
+        from outside (the step bound restarts with it). A delay that is no number, or is
+        negative, is an error (error.execution): the event is not raised."""
+        if isinstance(delay_ms, bool) or not isinstance(delay_ms, int | float) or delay_ms < 0:
+            raise ValueError(f"the delay of {name!r} is {delay_ms!r}, not a duration")
+        if sendid is None:  # a key no `as <name>` can give (a name has no dot)
+            self._sends += 1
+            key = f"send.{self._sends}"
+        else:
+            key = sendid
+        self.host.start_delayed(key, self.make_event(name, data, self.member_id), delay_ms)
+
+    def cancel_delayed(self, sendid: str) -> None:
+        """`cancel id`: the host drops the pending delayed events raised as `id`."""
+        self.host.cancel_delayed(sendid)
 
     # --- the algorithm
 

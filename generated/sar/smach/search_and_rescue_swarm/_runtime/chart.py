@@ -7,6 +7,7 @@ functions swarmgen rendered from the model's expressions; `build()` links and ch
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -155,6 +156,18 @@ def fields_filler(template: Mapping[str, Any]) -> Callable[[Mapping[str, Any] | 
         return filled
 
     return fill_event
+
+
+_DURATION = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
+
+
+def duration_ms(value: Any) -> float:
+    """A CSS2 time (`"1.5s"`, `"200ms"`, `".5s"`: SCXML's `delay`) in milliseconds; anything
+    else is an error (error.execution where an action computes it; `$sg.duration` in SCXML)."""
+    found = _DURATION.fullmatch(value) if isinstance(value, str) else None
+    if found is None:
+        raise ValueError(f"{value!r} is not a duration such as '2s' or '500ms'")
+    return float(found.group(1)) * (1.0 if found.group(2) == "ms" else 1000.0)
 
 
 FINALIZE_PREFIX = "done.invoke."  # the host's word that a state's behaviour ended
@@ -319,6 +332,22 @@ class Context:
     def send(self, name: str, data: Mapping[str, Any] | None = None) -> None:
         """`send e`: an event to the swarm."""
         self._engine.send_swarm(name, data)
+
+    def raise_later(
+        self, name: str, data: Mapping[str, Any] | None, delay_ms: Any, sendid: str | None
+    ) -> None:
+        """`raise e after N ms [as id]`: an event to this member's external queue once the
+        delay is over, unless `cancel id` comes first."""
+        self._engine.raise_delayed(name, data, delay_ms, sendid)
+
+    def cancel(self, sendid: str) -> None:
+        """`cancel id`: the pending delayed events raised as `id` never arrive."""
+        self._engine.cancel_delayed(sendid)
+
+    @staticmethod
+    def duration(value: Any) -> float:
+        """A duration string (`"1.5s"`, `"200ms"`, SCXML's delay syntax) in milliseconds."""
+        return duration_ms(value)
 
     def field(self, name: str) -> Any:
         """`event.<name>`: a field the current event does not carry is an error (SCXML's

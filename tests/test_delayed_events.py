@@ -1,0 +1,146 @@
+"""Delayed raises and their cancellation (`raise e after N ms as id`, `cancel id`; W3C's
+delayed `<send>` and `<cancel>`): the expression language, the SCXML reader and emitter, and
+one trace in every replay backend (asyncio, smach and the emitted SCXML in Qt SCXML), with
+`wait` steps that let real time pass (docs/semantics.md, "Delayed events")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from swarmgen import expr, pipeline, replay
+from swarmgen.conformance import irp
+from swarmgen.scxml.emit import serialize
+from tests.modelkit import ModelKit
+
+BACKENDS = ("asyncio", "smach", "scxml")
+
+
+def test_the_action_language_reads_and_prints_delays() -> None:
+    actions = expr.parse_actions(
+        "raise e(f = 1) after 2 s as t\ncancel t\nraise g after n * 10 ms\nraise h after d"
+    )
+    delayed, cancel, computed, text = actions
+    assert isinstance(delayed, expr.Raise) and delayed.delay is not None
+    assert (delayed.delay.unit, delayed.sendid) == ("s", "t")
+    assert cancel == expr.Cancel(sendid="t")
+    assert isinstance(computed, expr.Raise) and computed.delay is not None
+    assert expr.free_names(computed.delay.amount) == {"n"}
+    assert isinstance(text, expr.Raise) and text.delay is not None and text.delay.unit == ""
+    assert expr.parse_actions("cancel = 1") == (
+        expr.Assign(target="cancel", value=expr.Const(value=1)),
+    )
+    for bad in ("send e after 1 s", "cancel", "raise e after 1 s as", "cancel 3"):
+        with pytest.raises(expr.ExprError):
+            expr.parse_actions(bad)
+
+
+def _model(tmp_path: Path) -> Path:
+    """Armed: `tick` after 80 ms as `tk` (cancelled by `stop`), `late` after 200 ms as `lt`
+    (cancelled when `tick` comes); Ticked re-arms `ping` every 100 ms, counted. Every step
+    is 50 ms or more from the due times around it."""
+    kit = ModelKit("Delays")
+    for name in ("go", "stop"):
+        kit.event(name, sender="station")
+    for name in ("tick", "late"):
+        kit.event(name, scope="local")
+    kit.event("ping", {"n": "Integer"}, scope="local")
+    machine = kit.machine("BotMachine")
+    machine.initial("Idle")
+    machine.state("Idle")
+    machine.state("Armed", entry="raise tick after 80 ms as tk\nraise late after 200 ms as lt")
+    machine.state("Ticked", entry="raise ping(n = count) after delay ms as p")
+    machine.state("Late")
+    machine.transition("Idle", "Armed", "go")
+    machine.transition("Armed", "Idle", "stop", effect="cancel tk")
+    machine.transition("Armed", "Ticked", "tick", effect="cancel lt")
+    machine.transition("Armed", "Late", "late")
+    machine.transition("Idle", "Late", "late")
+    machine.transition("Ticked", "Ticked", "ping", effect="count = event.n + 1")
+    machine.transition("Ticked", "Idle", "stop", effect="cancel p")
+    kit.member("Bot", machine, data={"count": ("Integer", None), "delay": ("Integer", 100)})
+    kit.swarm("Swarm", {"Bot": 1})
+    path = tmp_path / "delays.xmi"
+    path.write_text(kit.xmi(), encoding="utf-8")
+    return path
+
+
+STEPS: list[dict[str, Any]] = [
+    {"event": "go"},
+    {"event": "stop"},  # `tick` cancelled; `late` (not cancelled) still comes
+    {"wait": 300},  # late -> Late
+    {"event": "go"},  # Late has no `go`: nothing
+]
+TICKING: list[dict[str, Any]] = [
+    {"event": "go"},
+    {"wait": 130},  # tick (80 ms) -> Ticked, late cancelled, ping due at 180 ms
+    {"wait": 100},  # ping (n 0): count 1, re-armed for 280 ms
+    {"event": "stop"},  # ping cancelled -> Idle
+    {"wait": 150},  # neither ping nor late comes
+]
+
+
+def _traces(model: Path, steps: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    traces = {b: replay.replay(model, "Bot", steps, b) for b in BACKENDS}
+    for backend, trace in traces.items():
+        assert trace == traces["scxml"], f"{backend} differs from Qt SCXML:\n{trace}"
+    return traces["scxml"]
+
+
+def test_a_cancelled_delay_never_arrives_and_others_do(tmp_path: Path, qt_available: None) -> None:
+    model = _model(tmp_path)
+    trace = _traces(model, STEPS)
+    assert [r["active"] for r in trace] == [["Idle"], ["Armed"], ["Idle"], ["Late"], ["Late"]]
+    trace = _traces(model, TICKING)
+    assert [r["active"] for r in trace] == [
+        ["Idle"], ["Armed"], ["Ticked"], ["Ticked"], ["Idle"], ["Idle"],
+    ]  # fmt: skip
+    assert [r["data"]["count"] for r in trace] == [0, 0, 0, 1, 1, 1]
+
+
+def test_the_scxml_reader_reads_delays_and_cancels(tmp_path: Path) -> None:
+    """A document's delayed sends, targetless sends and cancels run on the engine (IRP-like,
+    virtual clock) and come out again as `<send delay>`/`<cancel>`."""
+    document = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0">
+  <datamodel><data id="d" expr="'300ms'"/></datamodel>
+  <state id="s0">
+    <onentry>
+      <send event="tick" delay="100ms" id="t1"/>
+      <send event="late" delay="1s" id="lt"/>
+      <send event="dyn" delayexpr="d"/>
+      <send event="now"/>
+    </onentry>
+    <transition event="now" target="s1"/>
+  </state>
+  <state id="s1">
+    <transition event="tick" target="s2"><cancel sendid="lt"/></transition>
+    <transition event="*" target="fail"/>
+  </state>
+  <state id="s2">
+    <transition event="dyn" target="s3"/>
+    <transition event="*" target="fail"/>
+  </state>
+  <state id="s3">
+    <onentry><send event="end" delay=".5s"/></onentry>
+    <transition event="end" target="pass"/>
+    <transition event="*" target="fail"/>
+  </state>
+  <final id="pass"/>
+  <final id="fail"/>
+</scxml>
+"""
+    source = tmp_path / "delays.scxml"
+    assert irp.run_document(document.encode(), source) == irp.Outcome("pass")
+    validation = pipeline.validate(source)
+    text = serialize(validation.charts[0]).text
+    for piece in (
+        '<send event="tick" delay="100ms" id="t1"/>',
+        '<send event="late" delay="1000ms" id="lt"/>',
+        '<send event="dyn" delayexpr="$sg.duration(d)"/>',
+        '<send event="now" delay="0ms"/>',
+        '<cancel sendid="lt"/>',
+        '<send event="end" delay="500ms"/>',
+    ):
+        assert piece in text, text
