@@ -437,8 +437,10 @@ def _transition(ids: _Ids, machine: Machine, transition: _Transition, indent: st
             f'{indent}  <effect xmi:type="uml:OpaqueBehavior" xmi:id="{ids.new()}"><body>{escape(transition.effect)}</body></effect>'
         )
     for trigger in transition.triggers:
+        # the platform's error events are triggers by name, without an event (docs/semantics.md)
+        event = "" if trigger.startswith("error") else f' event="{ids["event:" + trigger]}"'
         lines.append(
-            f'{indent}  <trigger xmi:id="{ids.new()}" name={quoteattr(trigger)} event="{ids["event:" + trigger]}"/>'
+            f"{indent}  <trigger xmi:id={quoteattr(ids.new())} name={quoteattr(trigger)}{event}/>"
         )
     lines.append(f"{indent}</transition>")
     return lines

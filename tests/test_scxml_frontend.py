@@ -118,7 +118,7 @@ BAD = {
         "SG061",
         2,
     ),
-    "if": (_doc('<state id="A"><onentry><if cond="true"/></onentry></state>'), "SG060", 2),
+    "else-outside-if": (_doc('<state id="A"><onentry><else/></onentry></state>'), "SG060", 2),
     "invoke": (_doc('<state id="A"><invoke type="http"/></state>'), "SG060", 2),
     "script": (_doc('<script>x = 1;</script>\n<state id="A"/>'), "SG060", 2),
     "send-external-target": (

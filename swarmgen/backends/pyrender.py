@@ -217,7 +217,23 @@ class ChartRenderer:
             return [f"ctx.{method}({action.event!r}, {data})"]
         if isinstance(action, c.Cancel):
             return [f"ctx.cancel({action.sendid!r})"]
+        if isinstance(action, c.If):
+            return self._if_lines(action)
         return [f"ctx.opaque({action.language!r}, {action.text!r})"]
+
+    def _if_lines(self, action: c.If) -> list[str]:
+        """`if`/`elif`/`else`: each condition through `ctx.holds`, which makes one that fails
+        false and raises error.execution, and the block goes on (W3C `<if>`)."""
+        lines: list[str] = []
+        for number, (cond, actions) in enumerate(action.branches):
+            if cond is None:
+                lines.append("else:")
+            else:
+                keyword = "if" if number == 0 else "elif"
+                lines.append(f"{keyword} ctx.holds(lambda: {_unwrap(self.py(cond))}):")
+            inner = [line for each in actions for line in self._action_lines(each)]
+            lines += ["    " + line for line in inner or ["pass"]]
+        return lines
 
     def _delayed(self, action: c.Raise, delay: c.Delay, data: str) -> str:
         """`raise e after ...` with its delay in milliseconds."""

@@ -128,9 +128,12 @@ def _names(e: expr.Expr, chart: c.Chart) -> set[str]:
 
 def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
     read: set[str] = set()
-    for action in actions:
+    for action in c.flat(actions):
         if isinstance(action, c.Assign):
             read |= _names(action.value, chart)
+        elif isinstance(action, c.If):
+            for cond, _ in action.branches:
+                read |= _names(cond, chart) if cond is not None else set()
         elif isinstance(action, c.Raise | c.Send):
             if isinstance(action, c.Raise) and action.delay is not None:
                 read |= _names(action.delay.amount, chart)
@@ -141,7 +144,7 @@ def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
 
 
 def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
-    return {a.location for a in actions if isinstance(a, c.Assign)}
+    return {a.location for a in c.flat(actions) if isinstance(a, c.Assign)}
 
 
 def _outputs_written(owner: c.Node, transition: c.Transition) -> set[str]:

@@ -342,11 +342,11 @@ class _Lowering(Transitions):
         for machine in self.index.reachable_machines(self.root):
             for transition in machine.transitions:
                 names.update(t.name for t in transition.triggers if t.kind == TriggerKind.EVENT)
-                names.update(a.event for a in transition.effect if _names_event(a))
+                names.update(a.event for a in expr.flat(transition.effect) if _names_event(a))
             for placed in walk(machine):
                 if isinstance(placed.vertex, State):
                     actions = (*placed.vertex.entry, *placed.vertex.exit)
-                    names.update(a.event for a in actions if _names_event(a))
+                    names.update(a.event for a in expr.flat(actions) if _names_event(a))
         return [e for e in self.index.model.events if e.name in names]
 
 

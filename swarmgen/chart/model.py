@@ -79,7 +79,25 @@ class Opaque:
     text: str
 
 
-Action = Assign | Raise | Send | Cancel | Opaque
+@dataclass(frozen=True, slots=True)
+class If:
+    """`if`/`elif`/`else`: (condition or None for `else`, actions) per branch, in order."""
+
+    branches: tuple[tuple[expr.Expr | None, tuple[Action, ...]], ...]
+
+
+Action = Assign | Raise | Send | Cancel | If | Opaque
+
+
+def flat(actions: tuple[Action, ...]) -> list[Action]:
+    """The actions and, for an `if`, every branch's actions (pre-order)."""
+    found: list[Action] = []
+    for action in actions:
+        found.append(action)
+        if isinstance(action, If):
+            for _, inner in action.branches:
+                found += flat(inner)
+    return found
 
 
 @dataclass(frozen=True, slots=True)

@@ -103,6 +103,8 @@ class Transitions(Context):
             return self._timer_event(sid, transition, trigger, copy)
         if trigger.kind == TriggerKind.ANY:
             return "*"
+        if trigger.kind == TriggerKind.ERROR:
+            return trigger.name
         event = self.index.events.get(trigger.event or "")
         return event.ident if event is not None else identifier(trigger.name)
 
@@ -248,6 +250,9 @@ class Transitions(Context):
             if isinstance(action, expr.Cancel):
                 lowered.append(c.Cancel(action.sendid))
                 continue
+            if isinstance(action, expr.If):
+                lowered.append(self._if(action))
+                continue
             params = self._params(action.event, action.args)
             if isinstance(action, expr.Raise):
                 delay = action.delay
@@ -263,6 +268,10 @@ class Transitions(Context):
                 lowered.append(c.Send(self._event_ident(action.event), params))
         lowered += [c.Opaque(code.language or "unspecified", code.body) for code in opaque]
         return tuple(lowered)
+
+    def _if(self, action: expr.If) -> c.If:
+        """An `if` with each branch's actions lowered (outputs were read in `_actions`)."""
+        return c.If(tuple((b.cond, self._actions(b.actions, ())) for b in action.branches))
 
     def _params(self, event_name: str, args: tuple[expr.Arg, ...]) -> tuple[c.Param, ...]:
         """The effect's fields, then every declared field it leaves out with its default (the

@@ -111,13 +111,15 @@ def _actions(
     what: str,
 ) -> list[Diagnostic]:
     found: list[Diagnostic] = []
-    for action in actions:
+    for action in expr.flat(actions):
         if isinstance(action, expr.Assign):
             if action.target not in scope:
                 found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
-        if isinstance(action, expr.Cancel):
+        if isinstance(action, expr.Cancel | expr.If):
+            for value in expr.action_exprs(action):
+                found.extend(_names(value, scope, fields, span, what))
             continue
         for value in expr.action_exprs(action):
             found.extend(_names(value, scope, fields, span, what))

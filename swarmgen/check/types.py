@@ -236,6 +236,13 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
         return
     if isinstance(action, expr.Cancel):
         return
+    if isinstance(action, expr.If):
+        for branch in action.branches:
+            if branch.cond is not None:
+                typer.infer(branch.cond)
+            for inner in branch.actions:
+                _action(index, typer, inner, datatypes)
+        return
     if isinstance(action, expr.Raise) and action.delay is not None:
         amount = typer.infer(action.delay.amount)
         wanted = "string" if not action.delay.unit else "number"

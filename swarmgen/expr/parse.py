@@ -23,6 +23,7 @@ from swarmgen.expr.tree import (
     Binary,
     Binding,
     BinOp,
+    Branch,
     Cancel,
     Const,
     Delay,
@@ -30,6 +31,7 @@ from swarmgen.expr.tree import (
     Else,
     EventField,
     Expr,
+    If,
     Name,
     Raise,
     Send,
@@ -55,6 +57,7 @@ _NOT_ACTION = (
     "`cancel <name>`"
 )
 _NOT_BINDING = "a binding must be `name = expression`"
+_BRANCH_ENDS = frozenset({"elif", "else", "end"})
 
 # A parsed expression together with its depth: the depth limit keeps the recursive renderers
 # (and pydantic's own recursion) far from Python's recursion limit.
@@ -321,17 +324,72 @@ class _Parser:
             if not self.at_end_of_statement():
                 self.unexpected(self.peek())
 
-    def action(self) -> Assign | Raise | Send | Cancel:
+    def action(self) -> Action:
         tok = self.peek()
         # `send = 1` assigns member data named `send`
         if (
             tok.kind == "word"
-            and tok.text in ("raise", "send", "cancel")
+            and tok.text in ("raise", "send", "cancel", "if")
             and not self.is_op("=", self.peek(1))
         ):
+            if tok.text == "if":
+                return self.conditional()
             return self.cancel() if tok.text == "cancel" else self.event_action()
         target, value = self.assignment(_NOT_ACTION)
         return Assign(target=target, value=value)
+
+    def conditional(self) -> If:
+        """`if c then ... elif c then ... else ... end` (statements as anywhere else)."""
+        opening = self.advance()
+        self.enter(opening)
+        branches: list[Branch] = []
+        keyword = opening
+        while True:
+            cond: Expr | None = None
+            if keyword.text != "else":
+                cond, _ = self.expr(0)
+                if not self.is_word("then", self.peek()):
+                    self.fail(
+                        self.peek(), f"expected 'then' after the condition of '{keyword.text}'"
+                    )
+                self.advance()
+            branches.append(Branch(cond=cond, actions=self.block(opening)))
+            keyword = self.advance()  # elif, else or end: `block` stopped at one
+            if keyword.text == "end":
+                break
+            if branches[-1].cond is None:
+                self.fail(
+                    keyword, f"'{keyword.text}' after 'else'", hint="`else` is the last branch"
+                )
+        self.nest -= 1
+        return If(branches=tuple(branches))
+
+    def block(self, opening: Tok) -> tuple[Action, ...]:
+        """The statements of a branch, up to its `elif`, `else` or `end`."""
+        found: list[Action] = []
+        while True:
+            while self.peek().kind == "nl" or self.is_op(";", self.peek()):
+                self.advance()
+            tok = self.peek()
+            if tok.kind == "eof":
+                where = error_at(self.text, opening.offset, "")
+                self.fail(
+                    tok,
+                    "missing 'end'",
+                    hint=f"the 'if' at line {where.line + 1}, column {where.col + 1} is never closed",
+                )
+            if (
+                tok.kind == "word"
+                and tok.text in _BRANCH_ENDS
+                and not self.is_op("=", self.peek(1))
+            ):
+                return tuple(found)
+            found.append(self.action())
+            after = self.peek()
+            if not self.at_end_of_statement() and not (
+                after.kind == "word" and after.text in _BRANCH_ENDS
+            ):
+                self.unexpected(self.peek())
 
     def cancel(self) -> Cancel:
         self.advance()

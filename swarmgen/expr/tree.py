@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Collection, Iterator
+from collections.abc import Callable, Collection, Iterable, Iterator
 from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator
@@ -211,7 +211,34 @@ class Cancel(_Model):
     sendid: Ident
 
 
-Action = Annotated[Assign | Raise | Send | Cancel, Field(discriminator="kind")]
+class Branch(_Model):
+    """One branch of an `if`: its condition (None: `else`) and its actions."""
+
+    cond: Operand | None = None
+    actions: tuple[Action, ...] = ()
+
+
+class If(_Model):
+    """``if c then ... elif c then ... else ... end``: the first branch whose condition holds
+    runs (a condition that fails is false and raises error.execution, W3C's `<if>`)."""
+
+    kind: Literal["if"] = "if"
+    branches: tuple[Branch, ...]
+
+
+Action = Annotated[Assign | Raise | Send | Cancel | If, Field(discriminator="kind")]
+
+Branch.model_rebuild()
+If.model_rebuild()
+
+
+def flat(actions: Iterable[Action]) -> Iterator[Action]:
+    """The actions and, for an `if`, the actions of every branch (pre-order)."""
+    for action in actions:
+        yield action
+        if isinstance(action, If):
+            for branch in action.branches:
+                yield from flat(branch.actions)
 
 
 class Binding(_Model):
@@ -295,6 +322,15 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     changes)."""
     if isinstance(action, Cancel):
         return action
+    if isinstance(action, If):
+        branches = tuple(
+            Branch(
+                cond=rewrite(b.cond) if b.cond is not None else None,
+                actions=tuple(map_action(a, rewrite) for a in b.actions),
+            )
+            for b in action.branches
+        )
+        return action if branches == action.branches else If(branches=branches)
     if isinstance(action, Assign):
         value = rewrite(action.value)
         return action if value is action.value else Assign(target=action.target, value=value)
@@ -314,9 +350,12 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
 
 
 def action_exprs(action: Action) -> tuple[Expr, ...]:
-    """The expressions an action evaluates, in evaluation order."""
+    """The expressions an action evaluates itself (an `if`: its conditions, not its
+    branches' actions: `flat` gives those), in evaluation order."""
     if isinstance(action, Cancel):
         return ()
+    if isinstance(action, If):
+        return tuple(b.cond for b in action.branches if b.cond is not None)
     if isinstance(action, Assign):
         return (action.value,)
     found = tuple(a.value for a in action.args)

@@ -16,9 +16,8 @@ from swarmgen.frontend.scxml_expr import ExprUnsupported, InState, Marker, conju
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, in_sg, local
 
 _NOT_IN_IR = {
-    "if": "conditional actions are not in the IR yet",
-    "elseif": "conditional actions are not in the IR yet",
-    "else": "conditional actions are not in the IR yet",
+    "elseif": "<elseif> is read only inside <if>",
+    "else": "<else> is read only inside <if>",
     "foreach": "loops are not in the IR yet",
     "log": "logging is not in the IR yet",
     "script": "scripts other than swarmgen's $sg support script are not run",
@@ -157,6 +156,8 @@ class Actions:
             return self.internal_send(node)
         if tag == "cancel":
             return self.cancel(node)
+        if tag == "if":
+            return self.conditional(node)
         self.b.report(
             dg.SCXML_UNSUPPORTED,
             node,
@@ -208,6 +209,25 @@ class Actions:
             return f"({inner}){unit}" if inner is not None else None
         text = self.text(source, node)
         return f"({text})" if text is not None else None
+
+    def conditional(self, node: etree._Element) -> list[str]:
+        """`<if cond>` ... `<elseif cond/>` ... `<else/>` ... `</if>` as `if c then ... elif c
+        then ... else ... end` (a cond that does not translate is reported, and the if too)."""
+        cond = self.text(str(node.get("cond", "")), node)
+        lines = [f"if {cond} then"]
+        ok = cond is not None
+        for kid in node.iterchildren(tag=etree.Element):
+            if in_scxml(kid) and local(kid) == "elseif":
+                cond = self.text(str(kid.get("cond", "")), kid)
+                ok = ok and cond is not None
+                lines.append(f"elif {cond} then")
+            elif in_scxml(kid) and local(kid) == "else":
+                lines.append("else")
+            else:
+                inner = self.action(kid)
+                ok = ok and not (in_scxml(kid) and not inner and local(kid) != "log")
+                lines += inner
+        return [*lines, "end"] if ok else []
 
     def cancel(self, node: etree._Element) -> list[str]:
         """`<cancel sendid>`: `cancel id` (the timer pattern's is read with its state)."""
@@ -310,6 +330,8 @@ class Actions:
                 found.append((event, self.time_ref(self.timers[event])))
             elif event == "*":
                 found.append(("*", self.any_ref()))
+            elif event.removesuffix(".*") in ("error", "error.execution", "error.communication"):
+                found.append((event.removesuffix(".*"), None))
             elif (
                 event.split(".")[0] in ("done", "error", "outcome", "after") or event in triggerless
             ):

@@ -36,6 +36,20 @@ def action_text(action: expr.Action) -> str:
             return f"{verb} {action.event}{args}{_delay_text(action)}"
         case expr.Cancel():
             return f"cancel {action.sendid}"
+        case expr.If():
+            return _if_text(action)
+
+
+def _if_text(action: expr.If) -> str:
+    parts = []
+    for number, branch in enumerate(action.branches):
+        body = "; ".join(action_text(a) for a in branch.actions)
+        if branch.cond is None:
+            parts.append(f"else {body}")
+        else:
+            keyword = "if" if number == 0 else "elif"
+            parts.append(f"{keyword} {expr.to_text(branch.cond)} then {body}")
+    return " ".join(parts) + " end"
 
 
 def _delay_text(action: expr.Raise | expr.Send) -> str:

@@ -274,6 +274,7 @@ class TriggerKind(StrEnum):
     TIME = "time"  # `after` a delay
     CALL = "call"  # a UML CallEvent, named after its operation
     ANY = "any"
+    ERROR = "error"  # the platform's error events: error.execution, error.communication, error
 
 
 class Trigger(Node):

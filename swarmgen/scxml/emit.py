@@ -148,7 +148,7 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
     bounded = any(t.bounded for n in chart.walk() for t in n.transitions)
     writer = _Writer({d.name: d.id for d in chart.data}, {d.id: d for d in chart.data}, bounded)
     writer.datamodel(scxml, chart.data)
-    delays = any(_computed_delay(a) for n in chart.walk() for a in _actions_of(n))
+    delays = any(_computed_delay(a) for n in chart.walk() for a in c.flat(_actions_of(n)))
     _sub(scxml, "script").text = (
         SUPPORT_SCRIPT + (STEP_SCRIPT if bounded else "") + (DELAY_SCRIPT if delays else "")
     )
@@ -367,8 +367,24 @@ class _Writer:
                 self.params(send, action.params, _sg("param"))
             elif isinstance(action, c.Cancel):
                 _sub(parent, "cancel", {"sendid": action.sendid})
+            elif isinstance(action, c.If):
+                self.conditional(parent, action)
             else:
                 _sub(parent, _sg("opaque"), {"language": action.language}).text = action.text
+
+    def conditional(self, parent: etree._Element, action: c.If) -> None:
+        """`<if cond>` actions `<elseif cond/>` actions `<else/>` actions `</if>`."""
+        element: etree._Element | None = None
+        for cond, actions in action.branches:
+            if element is None:
+                element = _sub(
+                    parent, "if", {"cond": self.js(cond) if cond is not None else "true"}
+                )
+            elif cond is None:
+                _sub(element, "else")
+            else:
+                _sub(element, "elseif", {"cond": self.js(cond)})
+            self.actions(element, actions)
 
     def delayed(self, parent: etree._Element, action: c.Raise, delay: c.Delay) -> etree._Element:
         """`raise e after ...`: a `<send>` without target (the session's external queue)
@@ -461,11 +477,11 @@ def _computed_delay(action: c.Action) -> bool:
     )
 
 
-def _actions_of(node: c.Node) -> list[c.Action]:
-    """Every action of a node: entry, exit, its initial transition's and its transitions'."""
+def _actions_of(node: c.Node) -> tuple[c.Action, ...]:
+    """The actions of a node: entry, exit, its initial transition's and its transitions'."""
     found = [*node.onentry, *node.onexit]
     if node.initial is not None:
         found += node.initial.actions
     for transition in node.transitions:
         found += transition.actions
-    return found
+    return tuple(found)

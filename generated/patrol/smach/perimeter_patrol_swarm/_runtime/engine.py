@@ -171,6 +171,11 @@ class Engine:
             key = sendid
         self.host.start_delayed(key, self.make_event(name, data, self.member_id), delay_ms)
 
+    def execution_error(self, where: str, err: BaseException) -> None:
+        """An expression of executable content failed where the block goes on (an `if`
+        condition): error.execution, counted and reported as every other."""
+        self._error(where, err)
+
     def cancel_delayed(self, sendid: str) -> None:
         """`cancel id`: the host drops the pending delayed events raised as `id`."""
         self.host.cancel_delayed(sendid)

@@ -340,6 +340,15 @@ class Context:
         delay is over, unless `cancel id` comes first."""
         self._engine.raise_delayed(name, data, delay_ms, sendid)
 
+    def holds(self, cond: Callable[[], Any]) -> bool:
+        """The condition of an `if`/`elif`: one that fails is false and raises error.execution
+        (W3C 5.9), and the actions after it go on."""
+        try:
+            return bool(cond())
+        except Exception as err:
+            self._engine.execution_error("condition of an if", err)
+            return False
+
     def cancel(self, sendid: str) -> None:
         """`cancel id`: the pending delayed events raised as `id` never arrive."""
         self._engine.cancel_delayed(sendid)
