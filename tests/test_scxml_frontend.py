@@ -141,9 +141,9 @@ BAD = {
         "SG062",
         2,
     ),
-    "in-outside-join": (
-        _doc('<state id="A"><transition event="e" cond="In(\'A\')" target="A"/></state>'),
-        "SG060",
+    "in-without-quotes": (
+        _doc('<state id="A"><transition event="e" cond="In(A)" target="A"/></state>'),
+        "SG062",
         2,
     ),
     "xpath": (_doc('<state id="A"/>', "xpath"), "SG063", 1),

@@ -21,6 +21,7 @@ from typing import TypeGuard
 from swarmgen import expr
 from swarmgen.chart import model as c
 from swarmgen.chart.cycles import bound_cycles
+from swarmgen.chart.instates import resolve_in_states
 from swarmgen.chart.lowering import Copy, Instance
 from swarmgen.chart.transitions import Transitions
 from swarmgen.ir.nodes import (
@@ -54,7 +55,8 @@ def lower(model: Model) -> tuple[c.Chart, ...]:
 
     The pipeline lowers a model once, after the model-level checks passed (`check.may_lower`),
     and hands the charts to the chart-level checks and every output."""
-    return tuple(bound_cycles(chart) for chart in _lower(model))  # the step bound's marks
+    # `In(name)` to chart ids, then the step bound's marks
+    return tuple(bound_cycles(resolve_in_states(chart)) for chart in _lower(model))
 
 
 def _lower(model: Model) -> tuple[c.Chart, ...]:

@@ -9,6 +9,7 @@ from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
 from swarmgen.ir.query import ModelIndex, walk
+from swarmgen.names import identifier
 from swarmgen.span import Span
 
 _NO_EVENT = frozenset[str]()
@@ -32,6 +33,30 @@ def check_expressions(model: Model) -> list[Diagnostic]:
             found.extend(_actions(index, state.entry, scope, _NO_EVENT, state.span, "entry action"))
             found.extend(_actions(index, state.exit, scope, _NO_EVENT, state.span, "exit action"))
             found.extend(_bindings(index, state, scope))
+    return found + _unknown_states(model)
+
+
+def _unknown_states(model: Model) -> list[Diagnostic]:
+    """`In("S")` where no state of the model is named S (nor has S as an SCXML id: a name
+    made an identifier, or a qualified `A__B`; lowering resolves it: `chart.instates`)."""
+    known = {p.vertex.name for m in model.machines for p in walk(m) if p.vertex.name}
+    known |= {identifier(name) for name in known}
+    found: list[Diagnostic] = []
+    for machine in model.machines:
+        places: list[tuple[tuple[expr.Action, ...], expr.Expr | None, Span, str]] = [
+            (t.effect, t.guard, t.span, "transition") for t in machine.transitions
+        ]
+        for placed in walk(machine):
+            if isinstance(placed.vertex, State):
+                vertex = placed.vertex
+                actions = (*vertex.entry, *vertex.exit)
+                places.append((actions, None, vertex.span, "entry or exit action"))
+        for actions, guard, span, what in places:
+            exprs = [guard] if guard is not None else []
+            exprs += [e for a in expr.flat(actions) for e in expr.action_exprs(a)]
+            for name in sorted({s for e in exprs for s in expr.in_states(e)}):
+                if name not in known and "__" not in name:
+                    found.append(dg.UNKNOWN_NAME.at(span, "state", what=what, name=name))
     return found
 
 

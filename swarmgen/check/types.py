@@ -88,6 +88,10 @@ class _Typer:
             return self.scope.names.get(e.name)
         if isinstance(e, expr.EventField):
             return self.scope.fields.get(e.field)
+        if isinstance(e, expr.System):  # `_event` is read field by field
+            return "string" if e.name in ("_sessionid", "_name") else None
+        if isinstance(e, expr.Attr) and isinstance(e.obj, expr.System):
+            return None if e.name == "data" or e.obj.name != "_event" else "string"
         if isinstance(e, expr.Attr):
             return self._attr(e)
         if isinstance(e, expr.Unary):

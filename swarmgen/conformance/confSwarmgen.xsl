@@ -144,7 +144,8 @@
 <xsl:template match="@conf:false"><xsl:attribute name="cond">false</xsl:attribute></xsl:template>
 <xsl:template match="@conf:eventFieldsAreBound"><xsl:attribute name="cond">'name' in _event</xsl:attribute></xsl:template>
 <xsl:template match="@conf:eventDataHasField"><xsl:attribute name="cond"><xsl:value-of select="."/> in _event.data</xsl:attribute></xsl:template>
-<xsl:template match="@conf:eventFieldHasNoValue"><xsl:attribute name="cond">typeof _event.<xsl:value-of select="."/> === 'undefined'</xsl:attribute></xsl:template>
+<!-- a field of _event W3C leaves blank: "" in swarmgen's datamodel (the value rule) -->
+<xsl:template match="@conf:eventFieldHasNoValue"><xsl:attribute name="cond">_event.<xsl:value-of select="."/> == ''</xsl:attribute></xsl:template>
 <xsl:template match="@conf:eventLanguageMatchesDatamodel"><xsl:attribute name="cond">_event.language == 'ecmascript'</xsl:attribute></xsl:template>
 <xsl:template match="@conf:originTypeEq"><xsl:attribute name="cond">_event.origintype == '<xsl:value-of select="."/>'</xsl:attribute></xsl:template>
 

@@ -10,11 +10,13 @@ from swarmgen.expr.lex import Lexer, Tok
 from swarmgen.expr.render import to_text
 from swarmgen.expr.tree import (
     COMPARISONS,
+    EVENT_META,
     MAX_DEPTH,
     MAX_TEXT,
     NOT_PREC,
     PREC,
     RESERVED,
+    SYSTEM_VARIABLES,
     UNARY_PREC,
     Action,
     Arg,
@@ -32,9 +34,11 @@ from swarmgen.expr.tree import (
     EventField,
     Expr,
     If,
+    InState,
     Name,
     Raise,
     Send,
+    System,
     Unary,
     UnOp,
     Value,
@@ -225,6 +229,10 @@ class _Parser:
         if tok.text == "else":
             self.else_misplaced(tok)
         self.advance()
+        if tok.text in SYSTEM_VARIABLES:
+            return self.system(tok)
+        if tok.text == "In" and self.is_op("(", self.peek()):
+            return self.in_state()
         if tok.text != "event":
             return Name(name=tok.text), 1
         if not self.is_op(".", self.peek()):
@@ -235,6 +243,34 @@ class _Parser:
             self.fail(field, "expected a field name after 'event.'")
         self.advance()
         return EventField(field=field.text), 1
+
+    def in_state(self) -> _Node:
+        """`In("S")`: a state's name (or chart id) in quotes."""
+        opening = self.advance()
+        name = self.peek()
+        if name.kind != "str" or not isinstance(name.value, str):
+            self.fail(name, 'In() takes a state name in quotes: In("Searching")')
+        self.advance()
+        self.close(opening)
+        try:
+            return InState(state=name.value), 1
+        except ValueError as err:
+            self.fail(name, str(err).splitlines()[-1])
+
+    def system(self, tok: Tok) -> _Node:
+        """A system variable; `_event` only through one of its fields."""
+        variable = System(name=tok.text)  # one of SYSTEM_VARIABLES
+        if tok.text != "_event":
+            return variable, 1
+        if not self.is_op(".", self.peek()):
+            self.fail(tok, "`_event` needs a field: _event.name, _event.type, ...")
+        self.advance()
+        field = self.peek()
+        if field.kind != "word" or field.text not in EVENT_META:
+            known = ", ".join(sorted(EVENT_META))
+            self.fail(field, f"`_event` has the fields {known}")
+        self.advance()
+        return Attr(obj=variable, name=field.text), 2
 
     def group(self) -> _Node:
         opening = self.advance()

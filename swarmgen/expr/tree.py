@@ -13,8 +13,13 @@ MAX_DEPTH = 100
 # ECMAScript numbers are doubles: larger integers would silently change value in the SCXML.
 MAX_INT = 2**53 - 1
 
+# W3C SCXML's system variables, read-only (docs/semantics.md, "System variables")
+SYSTEM_VARIABLES = frozenset({"_event", "_sessionid", "_name", "_ioprocessors"})
+# the fields of `_event` (W3C 5.10.1); `_event.data.f` is `event.f`
+EVENT_META = frozenset({"name", "type", "sendid", "origin", "origintype", "invokeid", "data"})
 RESERVED = frozenset(
     {"and", "or", "not", "true", "false", "True", "False", "null", "None", "else", "event"}
+    | SYSTEM_VARIABLES
 )
 
 BinOp = Literal["or", "and", "==", "!=", "<", "<=", ">", ">=", "+", "-", "*", "/", "%"]
@@ -73,7 +78,7 @@ def _not_else(value: Expr) -> Expr:
 
 
 def _path(value: Expr) -> Expr:
-    if not isinstance(value, Name | EventField | Attr):
+    if not isinstance(value, Name | EventField | Attr | System):
         raise ValueError("attribute access needs a name on the left")
     return value
 
@@ -111,6 +116,27 @@ class EventField(_Model):
     field: Ident
 
 
+class System(_Model):
+    """A system variable: `_event` (read through its fields: `_event.name`), `_sessionid`,
+    `_name`, `_ioprocessors` (W3C 5.10); read-only."""
+
+    kind: Literal["system"] = "system"
+    name: Literal["_event", "_sessionid", "_name", "_ioprocessors"]
+
+
+def _state_name(value: str) -> str:
+    if not value or not value.isprintable() or len(value) > 200:
+        raise ValueError("a state name is 1 to 200 printable characters")
+    return value
+
+
+class InState(_Model):
+    """``In("S")``: whether the state named S (or of chart id S) is active (W3C's `In()`)."""
+
+    kind: Literal["in"] = "in"
+    state: Annotated[str, AfterValidator(_state_name)]
+
+
 class Attr(_Model):
     """``obj.name`` where obj is a name, an event field or another attribute access."""
 
@@ -143,7 +169,8 @@ class Else(_Model):
 
 
 Expr = Annotated[
-    Const | Name | EventField | Attr | Unary | Binary | Else, Field(discriminator="kind")
+    Const | Name | EventField | System | InState | Attr | Unary | Binary | Else,
+    Field(discriminator="kind"),
 ]
 Operand = Annotated[Expr, AfterValidator(_not_else)]
 
@@ -372,3 +399,26 @@ def free_names(expr: Expr) -> frozenset[str]:
 def event_fields(expr: Expr) -> frozenset[str]:
     """Fields of the triggering event read by the expression."""
     return frozenset(n.field for n in walk(expr) if isinstance(n, EventField))
+
+
+def in_states(expr: Expr) -> frozenset[str]:
+    """The states `In(...)` tests in the expression."""
+    return frozenset(n.state for n in walk(expr) if isinstance(n, InState))
+
+
+def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
+    """`In(name)` with its name replaced by `ids(name)` (lowering: names to chart ids)."""
+    if isinstance(expr, InState):
+        return InState(state=ids(expr.state))
+    if isinstance(expr, Attr):
+        obj = resolve_states(expr.obj, ids)
+        return expr if obj is expr.obj else Attr(obj=obj, name=expr.name)
+    if isinstance(expr, Unary):
+        operand = resolve_states(expr.operand, ids)
+        return expr if operand is expr.operand else Unary(op=expr.op, operand=operand)
+    if isinstance(expr, Binary):
+        left, right = resolve_states(expr.left, ids), resolve_states(expr.right, ids)
+        if left is expr.left and right is expr.right:
+            return expr
+        return Binary(op=expr.op, left=left, right=right)
+    return expr

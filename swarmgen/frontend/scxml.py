@@ -54,6 +54,7 @@ class _Document:
     def __init__(self, b: Builder, root: etree._Element) -> None:
         self.b, self.root = b, root
         self.data_names: dict[str, str] = {}
+        self.setup: list[etree._Element] = []  # `<data>` whose expr is computed at the start
         self.event_names: dict[str, str] = {}  # identifier -> model name
         self.signal_events: dict[str, str] = {}  # model name -> SignalEvent id
         self.time_events: dict[int, str] = {}
@@ -100,6 +101,7 @@ class _Document:
             language,
         )
         states = States(self.b, actions, self.package, emitted=sg(root, "machine") is not None)
+        states.setup = self.setup
         states.machine(root, machine)
         states.resolve()
         return RawModel(self.b.file, [self.model], self.b.index, self.b.stereotypes, "scxml")
@@ -243,10 +245,11 @@ class _Document:
             prop = self.b.make("ownedAttribute", "Property", owner, data, {"name": name})
             try:
                 value = literal(str(data.get("expr", "null")))
-            except ExprUnsupported as err:
-                self.b.report(
-                    dg.SCXML_EXPRESSION, data, text=str(data.get("expr"))[:200], why=str(err)
-                )
+            except ExprUnsupported:
+                # computed when the machine starts (W3C's early binding, before the initial
+                # transition): an untyped datum, assigned by the root's initial transition
+                self.setup.append(data)
+                self.b.make("defaultValue", "LiteralNull", prop, data)
                 continue
             type_name = sg(data, "type") or self.value_type(name, "", value, data)
             self.b.typed(prop, type_name, self.types)

@@ -136,8 +136,17 @@ class Actions:
             return self.event_action(node, "send", children(node, "param", sg_ns=True))
         if not in_scxml(node):
             return []  # foreign elements are ignored, as SCXML engines do
-        if tag == "assign":
-            location, value = str(node.get("location", "")), node.get("expr")
+        if tag in ("assign", "data"):  # a `<data expr>` computed at the start: an assignment
+            location, value = (
+                str(node.get("location" if tag == "assign" else "id", "")),
+                node.get("expr"),
+            )
+            if value is None and tag == "assign" and not len(node) and (node.text or "").strip():
+                value = (node.text or "").strip()  # inline content: an expression's text
+            if location in expr.SYSTEM_VARIABLES:
+                why = "system variables are read-only: swarmgen refuses the assignment when it compiles (W3C: error.execution when it runs)"
+                self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why=why)
+                return []
             text = self.text(str(value), node) if value is not None else None
             if value is None or not location.isidentifier():
                 self.b.report(
@@ -290,19 +299,12 @@ class Actions:
         except (ExprUnsupported, expr.ExprError, ValueError) as err:
             self.b.report(dg.SCXML_EXPRESSION, node, text=cond[:200], why=str(err).splitlines()[0])
             return []
-        states = [p.state for p in pieces if isinstance(p, InState)]
-        if states and join is None:
-            self.b.report(
-                dg.SCXML_UNSUPPORTED,
-                node,
-                "attribute",
-                attribute="cond",
-                value=cond[:200],
-                element="transition",
-                why="In() is read only as a join's sources (sg:join)",
-            )
-            return []
-        terms = [p for p in pieces if not isinstance(p, InState | Marker)]
+        states = [p.state for p in pieces if isinstance(p, InState)] if join else []
+        terms: list[expr.Expr] = [
+            expr.InState(state=p.state) if isinstance(p, InState) else p
+            for p in pieces
+            if not isinstance(p, Marker) and not (join and isinstance(p, InState))
+        ]
         if terms:
             whole = terms[0]
             for term in terms[1:]:

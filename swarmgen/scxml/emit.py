@@ -113,6 +113,21 @@ $sg.duration = function (v) {
   return Math.round(parseFloat(m[1]) * (m[3] === "s" ? 1000 : 1)) + "ms";
 };
 """
+# `_event.<field>` (only in a document that reads one): W3C's fields as the engine gives them
+# (`runtime.engine.event_fields`): "" where Qt SCXML leaves a field undefined, `{}` for no data,
+# the processor's type only with an origin (Qt also gives it to error.execution).
+META_SCRIPT = """
+$sg.meta = function (e, f) {
+  if (e === undefined || e === null) { throw new ReferenceError("_event is not bound yet"); }
+  var sent = e.origin !== undefined && e.origin !== null && e.origin !== "";
+  if (f === "data") {
+    return (e.data === undefined || e.data === null || e.data === "") ? {} : e.data;
+  }
+  if (f === "origintype") { return sent ? "http://www.w3.org/TR/scxml/#SCXMLEventProcessor" : ""; }
+  var v = e[f];
+  return (v === undefined || v === null) ? "" : v;
+};
+"""
 TICK = "$sg.tick(_event)"
 SPIN = "$sg.spin()"
 
@@ -149,8 +164,12 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
     writer = _Writer({d.name: d.id for d in chart.data}, {d.id: d for d in chart.data}, bounded)
     writer.datamodel(scxml, chart.data)
     delays = any(_computed_delay(a) for n in chart.walk() for a in c.flat(_actions_of(n)))
+    meta = any(_reads_event_fields(e) for n in chart.walk() for e in _expressions_of(n))
     _sub(scxml, "script").text = (
-        SUPPORT_SCRIPT + (STEP_SCRIPT if bounded else "") + (DELAY_SCRIPT if delays else "")
+        SUPPORT_SCRIPT
+        + (STEP_SCRIPT if bounded else "")
+        + (DELAY_SCRIPT if delays else "")
+        + (META_SCRIPT if meta else "")
     )
     for node in chart.children:
         writer.node(scxml, node)
@@ -485,3 +504,26 @@ def _actions_of(node: c.Node) -> tuple[c.Action, ...]:
     for transition in node.transitions:
         found += transition.actions
     return tuple(found)
+
+
+def _expressions_of(node: c.Node) -> list[expr.Expr]:
+    """Every expression of a node: conds, action values and conditions, call arguments."""
+    found = [t.cond for t in node.transitions if t.cond is not None]
+    for action in c.flat(_actions_of(node)):
+        if isinstance(action, c.Assign):
+            found.append(action.value)
+        elif isinstance(action, c.If):
+            found += [cond for cond, _ in action.branches if cond is not None]
+        elif isinstance(action, c.Raise | c.Send):
+            found += [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
+    if node.call is not None:
+        found += [a.value for a in node.call.args]
+    return found
+
+
+def _reads_event_fields(e: expr.Expr) -> bool:
+    """Whether the expression reads a field of `_event` (`$sg.meta` in the document)."""
+    return any(
+        isinstance(s, expr.Attr) and isinstance(s.obj, expr.System) and s.obj.name == "_event"
+        for s in expr.walk(e)
+    )

@@ -24,6 +24,7 @@ class Event:
     # "external", "internal", "platform", or "raised": external, queued by this member's own
     # `raise e(f = ...)` (the step bound goes on counting through it)
     kind: str = "external"
+    sendid: str | None = None  # a delayed raise's send id ("" without `as`): `_event.sendid`
 
 
 class Host(Protocol):

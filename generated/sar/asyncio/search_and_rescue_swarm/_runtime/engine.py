@@ -24,6 +24,7 @@ from .chart import (
     Chart,
     Context,
     Node,
+    Record,
     StepBoundExceeded,
     Transition,
     record,
@@ -57,6 +58,7 @@ class Engine:
         self._activation: dict[Node, int] = {}
         self._ids = itertools.count(1)
         self._sends = 0  # delayed raises without a send id so far (their keys: `send.<n>`)
+        self.session_id = f"{self.chart.name}:{self.member_id}"  # `_sessionid`
         self._events = self.chart.events
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
@@ -169,7 +171,22 @@ class Engine:
             key = f"send.{self._sends}"
         else:
             key = sendid
-        self.host.start_delayed(key, self.make_event(name, data, self.member_id), delay_ms)
+        event = self.make_event(name, data, self.member_id)
+        event.sendid = sendid or ""
+        self.host.start_delayed(key, event, delay_ms)
+
+    def system_variable(self, name: str, event: Event | None) -> Any:
+        """`_event` (its W3C fields, docs/semantics.md), `_sessionid`, `_name`, `_ioprocessors`."""
+        if name == "_sessionid":
+            return self.session_id
+        if name == "_name":
+            return self.chart.name
+        if name == "_ioprocessors":
+            where = Record(location=f"#_scxml_{self.session_id}")
+            return Record({PROCESSOR: where, "scxml": where})
+        if event is None:
+            raise NameError("_event is not bound before the first event")
+        return event_fields(event)
 
     def execution_error(self, where: str, err: BaseException) -> None:
         """An expression of executable content failed where the block goes on (an `if`
@@ -391,3 +408,29 @@ class Engine:
         self.internal.append(self.make_event("error.execution", None, kind="platform"))
         if self.on_error is not None:
             self.on_error(where, err)
+
+
+PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"  # W3C's SCXML event I/O processor
+_TYPES = {"internal": "internal", "platform": "platform"}  # the rest is "external"
+
+
+def event_fields(event: Event) -> Record:
+    """`_event`'s W3C fields, with "" for a field W3C leaves blank and `{}` for no data: what
+    the SCXML document's `$sg.meta` makes of Qt SCXML's (docs/semantics.md). An event this
+    member sent itself (a raise with data, a delayed raise, a time event) has the origin
+    `#_internal` and the SCXML processor's type; only delayed raises with `as` and time
+    events (whose send id is their name) have a send id."""
+    name = event.name
+    timer = name.startswith("after.")
+    sendid = name if timer else (event.sendid or "")
+    sent = timer or event.sendid is not None or event.kind == "raised"
+    data = event.data
+    return Record(
+        name=name,
+        type=_TYPES.get(event.kind, "external"),
+        sendid=sendid,
+        origin="#_internal" if sent else "",
+        origintype=PROCESSOR if sent else "",
+        invokeid="",
+        data=data if isinstance(data, Record) else Record(),
+    )

@@ -321,6 +321,10 @@ class Context:
         data = self.event.data if self.event is not None else None
         return data if isinstance(data, Record) else Record()
 
+    def system(self, name: str) -> Any:
+        """A system variable (`_event`, `_sessionid`, `_name`, `_ioprocessors`; W3C 5.10)."""
+        return self._engine.system_variable(name, self.event)
+
     def is_active(self, node_id: str) -> bool:
         """`In(state)`: whether the state is active."""
         return bool(self._engine.is_active(node_id))
