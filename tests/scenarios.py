@@ -251,6 +251,8 @@ def _action_exprs(actions: Sequence[c.Action]) -> Iterator[x.Expr]:
             yield action.value
         elif isinstance(action, c.If):
             yield from (cond for cond, _ in action.branches if cond is not None)
+        elif isinstance(action, c.ForEach):
+            yield action.array
         elif isinstance(action, c.Raise | c.Send):
             if isinstance(action, c.Raise) and action.delay is not None:
                 yield action.delay.amount

@@ -219,6 +219,12 @@ class ChartRenderer:
             return [f"ctx.cancel({action.sendid!r})"]
         if isinstance(action, c.If):
             return self._if_lines(action)
+        if isinstance(action, c.ForEach):
+            self._reads_data = True
+            index = f"d[{action.index!r}]" if action.index is not None else "_"
+            head = f"for d[{action.item!r}], {index} in ctx.each({_unwrap(self.py(action.array))}):"
+            inner = [line for each in action.actions for line in self._action_lines(each)]
+            return [head, *("    " + line for line in inner or ["pass"])]
         return [f"ctx.opaque({action.language!r}, {action.text!r})"]
 
     def _if_lines(self, action: c.If) -> list[str]:

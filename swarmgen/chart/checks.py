@@ -134,6 +134,8 @@ def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
         elif isinstance(action, c.If):
             for cond, _ in action.branches:
                 read |= _names(cond, chart) if cond is not None else set()
+        elif isinstance(action, c.ForEach):
+            read |= _names(action.array, chart)
         elif isinstance(action, c.Raise | c.Send):
             if isinstance(action, c.Raise) and action.delay is not None:
                 read |= _names(action.delay.amount, chart)
@@ -144,7 +146,11 @@ def _action_reads(actions: tuple[c.Action, ...], chart: c.Chart) -> set[str]:
 
 
 def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
-    return {a.location for a in c.flat(actions) if isinstance(a, c.Assign)}
+    found = {a.location for a in c.flat(actions) if isinstance(a, c.Assign)}
+    for loop in c.flat(actions):
+        if isinstance(loop, c.ForEach):
+            found |= {loop.item, *([loop.index] if loop.index else [])}
+    return found
 
 
 def _outputs_written(owner: c.Node, transition: c.Transition) -> set[str]:

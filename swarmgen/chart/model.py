@@ -86,7 +86,17 @@ class If:
     branches: tuple[tuple[expr.Expr | None, tuple[Action, ...]], ...]
 
 
-Action = Assign | Raise | Send | Cancel | If | Opaque
+@dataclass(frozen=True, slots=True)
+class ForEach:
+    """`for item, index in array do ... end`: data ids written per item, then the actions."""
+
+    array: expr.Expr
+    item: str  # data id
+    index: str | None  # data id
+    actions: tuple[Action, ...]
+
+
+Action = Assign | Raise | Send | Cancel | If | ForEach | Opaque
 
 
 def flat(actions: tuple[Action, ...]) -> list[Action]:
@@ -97,6 +107,8 @@ def flat(actions: tuple[Action, ...]) -> list[Action]:
         if isinstance(action, If):
             for _, inner in action.branches:
                 found += flat(inner)
+        if isinstance(action, ForEach):
+            found += flat(action.actions)
     return found
 
 

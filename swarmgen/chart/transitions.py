@@ -253,6 +253,12 @@ class Transitions(Context):
             if isinstance(action, expr.If):
                 lowered.append(self._if(action))
                 continue
+            if isinstance(action, expr.ForEach):
+                index = self._data_ident(action.index) if action.index is not None else None
+                inner = self._actions(action.actions, ())
+                item = self._data_ident(action.item)
+                lowered.append(c.ForEach(action.array, item, index, inner))
+                continue
             params = self._params(action.event, action.args)
             if isinstance(action, expr.Raise):
                 delay = action.delay

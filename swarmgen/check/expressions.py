@@ -142,7 +142,11 @@ def _actions(
                 found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
-        if isinstance(action, expr.Cancel | expr.If):
+        if isinstance(action, expr.ForEach):
+            for target in (action.item, action.index):
+                if target is not None and target not in scope:
+                    found.append(_unknown_name(span, "assigns", what, target, scope))
+        if isinstance(action, expr.Cancel | expr.If | expr.ForEach):
             for value in expr.action_exprs(action):
                 found.extend(_names(value, scope, fields, span, what))
             continue

@@ -33,8 +33,10 @@ from swarmgen.expr.tree import (
     Else,
     EventField,
     Expr,
+    ForEach,
     If,
     InState,
+    ListOf,
     Name,
     Raise,
     Send,
@@ -199,6 +201,8 @@ class _Parser:
             self.advance()
             node = self.deeper(Attr(obj=node[0], name=name.text), node[1], name)
         tok = self.peek()
+        if self.is_op("[", tok) and _is_path(node[0]):
+            self.fail(tok, "indexing is not part of the expression language")
         if self.is_op("(", tok) and _is_path(node[0]):
             self.fail(
                 tok,
@@ -217,6 +221,8 @@ class _Parser:
             return self.word()
         if self.is_op("(", tok):
             return self.group()
+        if self.is_op("[", tok):
+            return self.list_of()
         self.expected_expression(tok)
 
     def word(self) -> _Node:
@@ -271,6 +277,28 @@ class _Parser:
             self.fail(field, f"`_event` has the fields {known}")
         self.advance()
         return Attr(obj=variable, name=field.text), 2
+
+    def list_of(self) -> _Node:
+        """`[a, b, ...]`: a sequence literal."""
+        opening = self.advance()
+        self.enter(opening)
+        items: list[Expr] = []
+        depth = 1
+        while not self.is_op("]", self.peek()):
+            item, item_depth = self.expr(0)
+            items.append(item)
+            depth = max(depth, item_depth + 1)
+            if not self.is_op(",", self.peek()):
+                break
+            self.advance()
+        tok = self.peek()
+        if not self.is_op("]", tok):
+            if tok.kind in ("nl", "eof") or self.is_op(";", tok):
+                self.fail(tok, "missing ']'")
+            self.unexpected(tok)
+        self.advance()
+        self.nest -= 1
+        return ListOf(items=tuple(items)), depth
 
     def group(self) -> _Node:
         opening = self.advance()
@@ -365,11 +393,13 @@ class _Parser:
         # `send = 1` assigns member data named `send`
         if (
             tok.kind == "word"
-            and tok.text in ("raise", "send", "cancel", "if")
+            and tok.text in ("raise", "send", "cancel", "if", "for")
             and not self.is_op("=", self.peek(1))
         ):
             if tok.text == "if":
                 return self.conditional()
+            if tok.text == "for":
+                return self.loop()
             return self.cancel() if tok.text == "cancel" else self.event_action()
         target, value = self.assignment(_NOT_ACTION)
         return Assign(target=target, value=value)
@@ -399,6 +429,48 @@ class _Parser:
                 )
         self.nest -= 1
         return If(branches=tuple(branches))
+
+    def loop(self) -> ForEach:
+        """`for item[, index] in array do ... end`."""
+        opening = self.advance()
+        self.enter(opening)
+        names: list[str] = []
+        while True:
+            tok = self.peek()
+            if tok.kind != "word" or tok.text in RESERVED or tok.text in ("in", "do"):
+                self.fail(tok, "expected the member data that takes each item after 'for'")
+            names.append(self.advance().text)
+            if len(names) == 2 or not self.is_op(",", self.peek()):
+                break
+            self.advance()
+        if not self.is_word("in", self.peek()):
+            self.fail(
+                self.peek(),
+                "expected 'in' after the loop's data",
+                hint="`for x, i in xs do ... end`",
+            )
+        self.advance()
+        at = self.peek()
+        array, _ = self.expr(0)
+        root = array
+        while isinstance(root, Attr):
+            root = root.obj
+        if not isinstance(root, Name):
+            self.fail(
+                at,
+                "'for' iterates member data (`for x in xs`), not an expression",
+                hint="assign the sequence to member data first (Qt SCXML reads <foreach array> only as a location)",
+            )
+        if not self.is_word("do", self.peek()):
+            self.fail(self.peek(), "expected 'do' after the sequence of 'for'")
+        self.advance()
+        actions = self.block(opening)
+        closing = self.advance()
+        if closing.text != "end":
+            self.fail(closing, f"'{closing.text}' in a 'for' loop", hint="a loop ends with 'end'")
+        self.nest -= 1
+        index = names[1] if len(names) == 2 else None
+        return ForEach(array=array, item=names[0], index=index, actions=actions)
 
     def block(self, opening: Tok) -> tuple[Action, ...]:
         """The statements of a branch, up to its `elif`, `else` or `end`."""
@@ -550,6 +622,13 @@ def parse_expr(text: str) -> Expr:
     parser = _Parser(text, statements=False)
     node, _ = parser.expr(0)
     parser.expect_end()
+    if isinstance(node, ListOf) and len(node.items) == 1:  # `[x > 1]`: a guard in UML's brackets
+        raise error_at(
+            text,
+            0,
+            "a guard is not a list",
+            "UML shows guards in brackets; write the guard without `[ ]`",
+        )
     return node
 
 

@@ -22,6 +22,7 @@ from swarmgen.expr.tree import (
     EventField,
     Expr,
     InState,
+    ListOf,
     Name,
     System,
     Unary,
@@ -107,6 +108,8 @@ def to_text(expr: Expr) -> str:
             return expr.name
         case InState():
             return f"In({_const_text(expr.state)})"
+        case ListOf():
+            return "[" + ", ".join(to_text(i) for i in expr.items) + "]"
         case Attr():
             return f"{to_text(expr.obj)}.{expr.name}"
         case Unary():
@@ -174,6 +177,8 @@ def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:
             return expr.name  # the SCXML datamodel's own system variables
         case InState():
             return f"In({_js_string(expr.state)})"
+        case ListOf():
+            return "[" + ", ".join(to_ecmascript(i, name) for i in expr.items) + "]"
         case Attr() if expr.obj == _EVENT:
             # W3C's fields as swarmgen gives them: "" where Qt leaves one undefined, `{}` for
             # no data (the support script's `$sg.meta`, docs/semantics.md)
@@ -219,6 +224,8 @@ def to_python(expr: Expr, name: Callable[[str], str], event_field: Callable[[str
             return f"ctx.system({expr.name!r})"
         case InState():
             return f"ctx.is_active({expr.state!r})"
+        case ListOf():
+            return "[" + ", ".join(to_python(i, name, event_field) for i in expr.items) + "]"
         case Attr():
             return _py_attr(to_python(expr.obj, name, event_field), expr.name)
         case Unary():

@@ -145,6 +145,13 @@ class Attr(_Model):
     name: Ident
 
 
+class ListOf(_Model):
+    """``[a, b, ...]``: a sequence of the items' values (what `for` iterates, W3C's arrays)."""
+
+    kind: Literal["list"] = "list"
+    items: tuple[Operand, ...] = ()
+
+
 class Unary(_Model):
     """A prefix operator (`not`, `-`) applied to an operand."""
 
@@ -169,12 +176,12 @@ class Else(_Model):
 
 
 Expr = Annotated[
-    Const | Name | EventField | System | InState | Attr | Unary | Binary | Else,
+    Const | Name | EventField | System | InState | ListOf | Attr | Unary | Binary | Else,
     Field(discriminator="kind"),
 ]
 Operand = Annotated[Expr, AfterValidator(_not_else)]
 
-for _cls in (Attr, Unary, Binary):
+for _cls in (ListOf, Attr, Unary, Binary):
     _cls.model_rebuild()
 
 
@@ -253,10 +260,22 @@ class If(_Model):
     branches: tuple[Branch, ...]
 
 
-Action = Annotated[Assign | Raise | Send | Cancel | If, Field(discriminator="kind")]
+class ForEach(_Model):
+    """``for item[, index] in array do ... end``: the actions once per item of a copy of the
+    sequence, `item` and `index` (from 0) written to member data first (W3C's `<foreach>`)."""
+
+    kind: Literal["foreach"] = "foreach"
+    array: Operand
+    item: DataName
+    index: DataName | None = None
+    actions: tuple[Action, ...] = ()
+
+
+Action = Annotated[Assign | Raise | Send | Cancel | If | ForEach, Field(discriminator="kind")]
 
 Branch.model_rebuild()
 If.model_rebuild()
+ForEach.model_rebuild()
 
 
 def flat(actions: Iterable[Action]) -> Iterator[Action]:
@@ -266,6 +285,8 @@ def flat(actions: Iterable[Action]) -> Iterator[Action]:
         if isinstance(action, If):
             for branch in action.branches:
                 yield from flat(branch.actions)
+        if isinstance(action, ForEach):
+            yield from flat(action.actions)
 
 
 class Binding(_Model):
@@ -279,6 +300,8 @@ class Binding(_Model):
 
 
 def _children(e: Expr) -> tuple[Expr, ...]:
+    if isinstance(e, ListOf):
+        return e.items
     if isinstance(e, Attr):
         return (e.obj,)
     if isinstance(e, Unary):
@@ -306,6 +329,8 @@ def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
     """`event.<f>` read as the member datum `names[f]` instead (depth is bounded by the parser)."""
     if isinstance(expr, EventField) and expr.field in names:
         return Name(name=names[expr.field])
+    if isinstance(expr, ListOf):
+        return _items(expr, lambda e: replace_fields(e, names))
     if isinstance(expr, Attr):
         obj = replace_fields(expr.obj, names)
         return expr if obj is expr.obj else Attr(obj=obj, name=expr.name)
@@ -323,6 +348,8 @@ def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
 def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
     """`E.lit` read as the literal `lit` of enumeration `E` when `E` is one of `enums` (a
     string constant that remembers its enumeration; depth is bounded by the parser)."""
+    if isinstance(expr, ListOf):
+        return _items(expr, lambda e: resolve_enums(e, enums))
     if isinstance(expr, Attr):
         if isinstance(expr.obj, Name) and expr.obj.name in enums:
             return Const(value=expr.name, enum=expr.obj.name)
@@ -349,6 +376,11 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     changes)."""
     if isinstance(action, Cancel):
         return action
+    if isinstance(action, ForEach):
+        array, inner = rewrite(action.array), tuple(map_action(a, rewrite) for a in action.actions)
+        if array is action.array and inner == action.actions:
+            return action
+        return ForEach(array=array, item=action.item, index=action.index, actions=inner)
     if isinstance(action, If):
         branches = tuple(
             Branch(
@@ -383,6 +415,8 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
         return ()
     if isinstance(action, If):
         return tuple(b.cond for b in action.branches if b.cond is not None)
+    if isinstance(action, ForEach):
+        return (action.array,)
     if isinstance(action, Assign):
         return (action.value,)
     found = tuple(a.value for a in action.args)
@@ -410,6 +444,8 @@ def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
     """`In(name)` with its name replaced by `ids(name)` (lowering: names to chart ids)."""
     if isinstance(expr, InState):
         return InState(state=ids(expr.state))
+    if isinstance(expr, ListOf):
+        return _items(expr, lambda e: resolve_states(e, ids))
     if isinstance(expr, Attr):
         obj = resolve_states(expr.obj, ids)
         return expr if obj is expr.obj else Attr(obj=obj, name=expr.name)
@@ -422,3 +458,11 @@ def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
             return expr
         return Binary(op=expr.op, left=left, right=right)
     return expr
+
+
+def _items(expr: ListOf, rewrite: Callable[[Expr], Expr]) -> ListOf:
+    """The list with `rewrite` applied to its items (itself when none changes)."""
+    items = tuple(rewrite(item) for item in expr.items)
+    if all(new is old for new, old in zip(items, expr.items, strict=True)):
+        return expr
+    return ListOf(items=items)

@@ -99,6 +99,7 @@ class _Document:
             self.any_ref,
             self.behaviours,
             language,
+            self.declare,
         )
         states = States(self.b, actions, self.package, emitted=sg(root, "machine") is not None)
         states.setup = self.setup
@@ -229,7 +230,8 @@ class _Document:
     def datamodel(self, owner: RawElement) -> None:
         for data in self.data_nodes(report=True):
             ident = str(data.get("id", ""))
-            if data.get("src") is not None or len(data) or (data.text or "").strip():
+            content = (data.text or "").strip()
+            if data.get("src") is not None or len(data) or (content and data.get("expr")):
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,
                     data,
@@ -243,8 +245,11 @@ class _Document:
             name = sg(data, "name") or ident
             self.data_names[ident] = name
             prop = self.b.make("ownedAttribute", "Property", owner, data, {"name": name})
+            source = data.get("expr") or content or "null"  # inline content: the value's text
             try:
-                value = literal(str(data.get("expr", "null")))
+                value = literal(source)
+                if isinstance(value, list):  # a sequence: made by the language's `[...]`
+                    raise ExprUnsupported("an array")
             except ExprUnsupported:
                 # computed when the machine starts (W3C's early binding, before the initial
                 # transition): an untyped datum, assigned by the root's initial transition
@@ -257,6 +262,14 @@ class _Document:
                 self.b.make("defaultValue", "LiteralNull", prop, data)
             else:
                 self.b.literal(prop, "defaultValue", value, data)
+
+    def declare(self, ident: str, node: etree._Element) -> None:
+        """A datum no `<data>` declares that `<foreach>` writes (W3C creates it): untyped."""
+        if ident in self.data_names or self.owner is None:
+            return
+        self.data_names[ident] = ident
+        prop = self.b.make("ownedAttribute", "Property", self.owner, node, {"name": ident})
+        self.b.make("defaultValue", "LiteralNull", prop, node)
 
     def library(self) -> None:
         """`<sg:library>`: one package per library, a class, an operation per behaviour."""
@@ -321,7 +334,7 @@ class _Document:
                     str(p.get("name", ""))
                     for p in node
                     if isinstance(p.tag, str) and local(p) == "param"
-                ]
+                ] + str(node.get("namelist", "")).split()  # a namelist's data ids are fields
             for name in names:
                 if (
                     name

@@ -37,6 +37,7 @@ class Actions:
     any_ref: Callable[[], str]  # the AnyReceiveEvent's id
     behaviours: dict[str, str]  # behaviour name -> operation id
     language: str  # "ecmascript", "null" or "swarmgen"
+    declare: Callable[[str, etree._Element], None]  # a datum `<foreach>` names, if new
     timers: dict[str, int] = field(default_factory=dict)  # timer event -> delay (ms)
 
     def text(self, source: str, node: etree._Element) -> str | None:
@@ -141,7 +142,7 @@ class Actions:
                 str(node.get("location" if tag == "assign" else "id", "")),
                 node.get("expr"),
             )
-            if value is None and tag == "assign" and not len(node) and (node.text or "").strip():
+            if value is None and not len(node) and (node.text or "").strip():
                 value = (node.text or "").strip()  # inline content: an expression's text
             if location in expr.SYSTEM_VARIABLES:
                 why = "system variables are read-only: swarmgen refuses the assignment when it compiles (W3C: error.execution when it runs)"
@@ -167,6 +168,8 @@ class Actions:
             return self.cancel(node)
         if tag == "if":
             return self.conditional(node)
+        if tag == "foreach":
+            return self.loop(node)
         self.b.report(
             dg.SCXML_UNSUPPORTED,
             node,
@@ -238,6 +241,29 @@ class Actions:
                 lines += inner
         return [*lines, "end"] if ok else []
 
+    def loop(self, node: etree._Element) -> list[str]:
+        """`<foreach array item index>` as `for item, index in array do ... end`; an item or
+        index no `<data>` declares is declared (W3C creates it)."""
+        item, index = node.get("item"), node.get("index")
+        names = [n for n in (item, index) if n is not None]
+        if item is None or not all(n.isidentifier() and not n.startswith("__") for n in names):
+            why = "item and index name data (identifiers)"
+            self.b.report(dg.SCXML_UNSUPPORTED, node, element="foreach", why=why)
+            return []
+        array = self.text(str(node.get("array", "")), node)
+        if array is None:
+            return []
+        for name in names:
+            self.declare(name, node)
+        targets = ", ".join(self.name(n) for n in names)
+        lines = [f"for {targets} in {array} do"]
+        for kid in node.iterchildren(tag=etree.Element):
+            inner = self.action(kid)
+            if in_scxml(kid) and not inner:
+                return []  # reported
+            lines += inner
+        return [*lines, "end"]
+
     def cancel(self, node: etree._Element) -> list[str]:
         """`<cancel sendid>`: `cancel id` (the timer pattern's is read with its state)."""
         sendid = node.get("sendid")
@@ -255,7 +281,9 @@ class Actions:
         self, node: etree._Element, verb: str, params: list[etree._Element]
     ) -> list[str]:
         """`raise`/`send` of an event with its fields (defaults left to the emitter)."""
-        fields = []
+        fields = [
+            f"{n} = {self.name(n)}" for n in str(node.get("namelist", "")).split()
+        ]  # W3C: each named datum as a field of its name
         for param in params:
             source = str(param.get("expr", ""))
             if source.lstrip().startswith(("{", "[")):
@@ -350,7 +378,7 @@ _LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
 # what swarmgen's emitter writes for a computed delay (docs/scxml.md)
 _OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
 _PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
-_UNREAD_SEND = ("typeexpr", "targetexpr", "eventexpr", "namelist", "idlocation")
+_UNREAD_SEND = ("typeexpr", "targetexpr", "eventexpr", "idlocation")
 
 
 def _unread_send(node: etree._Element) -> str | None:
@@ -359,7 +387,9 @@ def _unread_send(node: etree._Element) -> str | None:
     if target not in (None, "#_internal") or node.get("type") not in (None, _PROCESSOR):
         return "a send to another target or I/O processor is not in the IR"
     if any(node.get(a) is not None for a in _UNREAD_SEND) or children(node, "content"):
-        return "typeexpr, targetexpr, eventexpr, namelist, idlocation and <content> are not in the IR yet"
+        return "typeexpr, targetexpr, eventexpr, idlocation and <content> are not in the IR yet"
+    if not all(n.isidentifier() for n in str(node.get("namelist", "")).split()):
+        return "a namelist names data ids"
     if sendid is not None and (not sendid.isidentifier() or sendid.startswith("__")):
         return "a send id is an identifier"
     return None

@@ -197,6 +197,15 @@ class _Parser:
             inner = self.level(0)
             self.take(")")
             return inner
+        if text == "[":  # an array literal: swarmgen's sequence
+            items: list[expr.Expr] = []
+            while self.peek() != "]":
+                items.append(self.level(0))
+                if self.peek() != ",":
+                    break
+                self.take(",")
+            self.take("]")
+            return expr.ListOf(items=tuple(items))
         if kind == "name":
             return self.named(text)
         raise ExprUnsupported(f"unexpected {text!r}")

@@ -38,6 +38,10 @@ def action_text(action: expr.Action) -> str:
             return f"cancel {action.sendid}"
         case expr.If():
             return _if_text(action)
+        case expr.ForEach():
+            names = action.item + (f", {action.index}" if action.index else "")
+            body = "; ".join(action_text(a) for a in action.actions)
+            return f"for {names} in {expr.to_text(action.array)} do {body} end"
 
 
 def _if_text(action: expr.If) -> str:

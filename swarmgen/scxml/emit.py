@@ -388,6 +388,11 @@ class _Writer:
                 _sub(parent, "cancel", {"sendid": action.sendid})
             elif isinstance(action, c.If):
                 self.conditional(parent, action)
+            elif isinstance(action, c.ForEach):
+                attrs = {"array": self.js(action.array), "item": action.item}
+                if action.index is not None:
+                    attrs["index"] = action.index
+                self.actions(_sub(parent, "foreach", attrs), action.actions)
             else:
                 _sub(parent, _sg("opaque"), {"language": action.language}).text = action.text
 
@@ -514,6 +519,8 @@ def _expressions_of(node: c.Node) -> list[expr.Expr]:
             found.append(action.value)
         elif isinstance(action, c.If):
             found += [cond for cond, _ in action.branches if cond is not None]
+        elif isinstance(action, c.ForEach):
+            found.append(action.array)
         elif isinstance(action, c.Raise | c.Send):
             found += [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
     if node.call is not None:

@@ -344,6 +344,14 @@ class Context:
         delay is over, unless `cancel id` comes first."""
         self._engine.raise_delayed(name, data, delay_ms, sendid)
 
+    @staticmethod
+    def each(value: Any) -> list[tuple[Any, int]]:
+        """`for item, index in value`: (item, index) of a copy of the sequence (W3C's
+        `<foreach>` iterates a shallow copy); anything else is an error (error.execution)."""
+        if not isinstance(value, list | tuple):
+            raise TypeError(f"'for' takes a sequence, not {value!r}")
+        return [(item, index) for index, item in enumerate(list(value))]
+
     def holds(self, cond: Callable[[], Any]) -> bool:
         """The condition of an `if`/`elif`: one that fails is false and raises error.execution
         (W3C 5.9), and the actions after it go on."""
