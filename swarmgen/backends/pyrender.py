@@ -49,7 +49,13 @@ def format_python(source: str) -> str:
 
 
 # What each kind of helper function returns: guards, actions, call arguments and goal callbacks.
-RETURNS = {"cond": "bool", "action": "None", "args": "dict[str, Any]", "goal": "dict[str, Any]"}
+RETURNS = {
+    "cond": "bool",
+    "action": "None",
+    "args": "dict[str, Any]",
+    "goal": "dict[str, Any]",
+    "donedata": "Any",
+}
 
 
 @dataclass(frozen=True)
@@ -250,8 +256,13 @@ class ChartRenderer:
         return f"ctx.raise_later({action.event!r}, {data}, {ms}, {action.sendid!r})"
 
     def _hooks(self, node: c.Node) -> list[str]:
-        """The `onentry=` and `onexit=` options of a state (its action functions, if any)."""
+        """The `onentry=` and `onexit=` options of a state (its action functions, if any), and
+        a final state's `donedata=` (the fields of its done.state event)."""
         hooks = [("onentry", self._action(node.onentry)), ("onexit", self._action(node.onexit))]
+        if node.donedata or node.donecontent is not None:
+            items = ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in node.donedata)
+            value = self.py(node.donecontent) if node.donecontent is not None else f"{{{items}}}"
+            hooks.append(("donedata", self._function("donedata", [f"return {_unwrap(value)}"])))
         return [f"{key}={function}" for key, function in hooks if function]
 
     def _transition_options(self, transition: c.Transition, guard: str) -> list[str]:

@@ -1,4 +1,5 @@
-"""`In("S")` in conds and actions: the state's name resolved to its id in the lowered chart.
+"""`In("S")` in conds and actions, and `done.state.S` triggers: the state's name resolved to
+its id in the lowered chart.
 
 A name is a state's model name (`Node.name`) or its chart id (docs/scxml.md: readable ids).
 When several states of one chart have the name (a submachine used twice, equal names in
@@ -15,11 +16,13 @@ from dataclasses import replace
 from swarmgen import expr
 from swarmgen.chart import model as c
 
+DONE = "done.state."  # a trigger on another state's completion names the state
+
 
 def resolve_in_states(chart: c.Chart) -> c.Chart:
     """The chart with every `In(name)` naming its state's id."""
     nodes = chart.walk()
-    if not any(_has_in(node) for node in nodes):
+    if not any(_has_in(node) or _waits_for_done(node) for node in nodes):
         return chart
     ids: dict[str, str] = {}
     for node in nodes:  # document order: the first of a name wins
@@ -31,6 +34,10 @@ def resolve_in_states(chart: c.Chart) -> c.Chart:
         return ids.get(name, name)
 
     return replace(chart, children=tuple(_node(n, lookup) for n in chart.children))
+
+
+def _waits_for_done(node: c.Node) -> bool:
+    return any(e.startswith(DONE) for t in node.transitions for e in t.events)
 
 
 def _has_in(node: c.Node) -> bool:
@@ -67,7 +74,8 @@ def _node(node: c.Node, lookup: Callable[[str], str]) -> c.Node:
 
     def transition(t: c.Transition) -> c.Transition:
         cond = fix(t.cond) if t.cond is not None else None
-        return replace(t, cond=cond, actions=actions(t.actions))
+        events = tuple(DONE + lookup(e[len(DONE) :]) if e.startswith(DONE) else e for e in t.events)
+        return replace(t, events=events, cond=cond, actions=actions(t.actions))
 
     return replace(
         node,

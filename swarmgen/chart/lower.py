@@ -229,7 +229,15 @@ class _Lowering(Transitions):
 
     def _vertex(self, copy: Copy, vertex: Vertex) -> c.Node | None:
         if isinstance(vertex, FinalState):
-            return c.Node(self._id(copy.instance, vertex.id), "final", name=vertex.name or None)
+            return c.Node(
+                self._id(copy.instance, vertex.id),
+                "final",
+                name=vertex.name or None,
+                onentry=self._actions(vertex.entry, ()),
+                onexit=self._actions(vertex.exit, ()),
+                donedata=tuple(c.Param(identifier(a.name), a.value) for a in vertex.donedata),
+                donecontent=vertex.done_content,
+            )
         if isinstance(vertex, State):
             return self._state(copy, vertex)
         if vertex.kind in _HISTORY:

@@ -184,6 +184,8 @@ class Node:
     region: str | None = None  # the model's region name (a region of a parallel state)
     submachine: str | None = None  # name of the inlined machine
     pseudostate: str | None = None  # choice, junction, fork, entryPoint, ... (transient states)
+    donedata: tuple[Param, ...] = ()  # a final state's: the fields of its done.state event
+    donecontent: expr.Expr | None = None  # or the event's whole data
 
 
 @dataclass(frozen=True, slots=True)

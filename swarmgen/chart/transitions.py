@@ -103,8 +103,8 @@ class Transitions(Context):
             return self._timer_event(sid, transition, trigger, copy)
         if trigger.kind == TriggerKind.ANY:
             return "*"
-        if trigger.kind == TriggerKind.ERROR:
-            return trigger.name
+        if trigger.kind in (TriggerKind.ERROR, TriggerKind.DONE):
+            return trigger.name  # done.state.<name>: the state's id by `chart.instates`
         event = self.index.events.get(trigger.event or "")
         return event.ident if event is not None else identifier(trigger.name)
 
@@ -249,6 +249,8 @@ class Transitions(Context):
                 continue
             if isinstance(action, expr.Cancel):
                 lowered.append(c.Cancel(action.sendid))
+                continue
+            if isinstance(action, expr.Done):  # a final state's done data: `donedata`
                 continue
             if isinstance(action, expr.If):
                 lowered.append(self._if(action))

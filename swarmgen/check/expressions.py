@@ -7,7 +7,7 @@ from collections.abc import Iterable
 from swarmgen import diagnostics as dg
 from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
+from swarmgen.ir.nodes import FinalState, Model, Property, State, Transition, TriggerKind
 from swarmgen.ir.query import ModelIndex, walk
 from swarmgen.names import identifier
 from swarmgen.span import Span
@@ -29,6 +29,17 @@ def check_expressions(model: Model) -> list[Diagnostic]:
             found.extend(
                 _actions(index, transition.effect, scope, fields, transition.span, "effect")
             )
+        for placed in walk(machine):
+            final = placed.vertex
+            if isinstance(final, FinalState):
+                for actions, what in ((final.entry, "entry action"), (final.exit, "exit action")):
+                    found.extend(_actions(index, actions, scope, _NO_EVENT, final.span, what))
+                done = [a.value for a in final.donedata] + [final.done_content] * bool(
+                    final.done_content
+                )
+                for value in done:
+                    if value is not None:
+                        found.extend(_names(value, scope, _NO_EVENT, final.span, "done data"))
         for state in states.values():
             found.extend(_actions(index, state.entry, scope, _NO_EVENT, state.span, "entry action"))
             found.extend(_actions(index, state.exit, scope, _NO_EVENT, state.span, "exit action"))
@@ -75,14 +86,18 @@ def _event_fields(
             per_trigger.append(
                 frozenset(o.name for o in behaviour.outputs) if behaviour else _NO_EVENT
             )
-        elif trigger.kind in {TriggerKind.CALL, TriggerKind.ANY} or (
+        elif trigger.kind in {TriggerKind.CALL, TriggerKind.ANY, TriggerKind.DONE} or (
             trigger.kind == TriggerKind.EVENT and trigger.event is None
         ):
             return None  # untyped events (plain UML models): their fields are unknown
         else:
             per_trigger.append(_NO_EVENT)
     if not per_trigger:
-        return _NO_EVENT
+        source = states.get(transition.source)
+        completion = source is not None and bool(source.regions) and not transition.eventless
+        # a composite state's completion: done.state.<id>, whose fields its final states' done
+        # data gives (untyped)
+        return None if completion else _NO_EVENT
     return frozenset.intersection(*per_trigger)
 
 
@@ -141,6 +156,16 @@ def _actions(
             if action.target not in scope:
                 found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
+            continue
+        if isinstance(action, expr.Done):
+            found.append(
+                dg.EFFECT_SYNTAX.at(
+                    span,
+                    what=what,
+                    error="gives done(...), the done data of a final state",
+                    hint="only a final state's entry action gives done data",
+                )
+            )
             continue
         if isinstance(action, expr.ForEach):
             for target in (action.item, action.index):

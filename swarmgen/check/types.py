@@ -249,6 +249,8 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
     if isinstance(action, expr.ForEach):
         _loop(index, typer, action, datatypes)
         return
+    if isinstance(action, expr.Done):  # refused outside a final state (check.expressions)
+        return
     if isinstance(action, expr.If):
         for branch in action.branches:
             if branch.cond is not None:

@@ -30,6 +30,7 @@ from swarmgen.expr.tree import (
     Const,
     Delay,
     DelayUnit,
+    Done,
     Else,
     EventField,
     Expr,
@@ -393,9 +394,20 @@ class _Parser:
         # `send = 1` assigns member data named `send`
         if (
             tok.kind == "word"
-            and tok.text in ("raise", "send", "cancel", "if", "for")
+            and tok.text in ("raise", "send", "cancel", "if", "for", "done")
             and not self.is_op("=", self.peek(1))
         ):
+            if tok.text == "done":
+                self.advance()
+                if not self.is_op("(", self.peek()):
+                    self.fail(self.peek(), "`done` needs its fields: done(f = expr, ...)")
+                named = self.peek(1).kind == "word" and self.is_op("=", self.peek(2))
+                if named or self.is_op(")", self.peek(1)):
+                    return Done(args=self.arguments())
+                opening = self.advance()  # `done(expr)`: the data is the value itself
+                content, _ = self.expr(0)
+                self.close(opening)
+                return Done(content=content)
             if tok.text == "if":
                 return self.conditional()
             if tok.text == "for":

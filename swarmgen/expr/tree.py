@@ -238,6 +238,15 @@ class Send(_Model):
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
 
 
+class Done(_Model):
+    """``done(f = expr, ...)``: a final state's done data (W3C `<donedata>`): the fields of the
+    `done.state.<parent>` event entering the final state raises. Only in a final state's entry."""
+
+    kind: Literal["done"] = "done"
+    args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
+    content: Operand | None = None  # `done(expr)`: the event's data is this value (W3C <content>)
+
+
 class Cancel(_Model):
     """``cancel <name>``: drop the delayed events raised `as <name>` that are still pending."""
 
@@ -271,7 +280,9 @@ class ForEach(_Model):
     actions: tuple[Action, ...] = ()
 
 
-Action = Annotated[Assign | Raise | Send | Cancel | If | ForEach, Field(discriminator="kind")]
+Action = Annotated[
+    Assign | Raise | Send | Cancel | If | ForEach | Done, Field(discriminator="kind")
+]
 
 Branch.model_rebuild()
 If.model_rebuild()
@@ -376,6 +387,15 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     changes)."""
     if isinstance(action, Cancel):
         return action
+    if isinstance(action, Done):
+        values = [rewrite(a.value) for a in action.args]
+        content = rewrite(action.content) if action.content is not None else None
+        if content is action.content and all(
+            v is a.value for v, a in zip(values, action.args, strict=True)
+        ):
+            return action
+        args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
+        return Done(args=args, content=content)
     if isinstance(action, ForEach):
         array, inner = rewrite(action.array), tuple(map_action(a, rewrite) for a in action.actions)
         if array is action.array and inner == action.actions:
@@ -417,6 +437,8 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
         return tuple(b.cond for b in action.branches if b.cond is not None)
     if isinstance(action, ForEach):
         return (action.array,)
+    if isinstance(action, Done):
+        return (*(a.value for a in action.args), *([action.content] if action.content else []))
     if isinstance(action, Assign):
         return (action.value,)
     found = tuple(a.value for a in action.args)

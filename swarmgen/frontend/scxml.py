@@ -124,7 +124,9 @@ class _Document:
                         dg.SCXML_BAD_DOCUMENT, node, "duplicate-id", id=ident, where=where
                     )
                 seen.setdefault(str(ident), node)
-            if in_scxml(node) and tag in ("invoke", "donedata", "finalize"):
+            parent = node.getparent()
+            misplaced = tag == "donedata" and (parent is None or local(parent) != "final")
+            if in_scxml(node) and (tag in ("invoke", "finalize") or misplaced):
                 self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why="not in the IR yet")
             if in_scxml(node) and tag == "script" and not self.support_script(node):
                 self.b.report(

@@ -12,7 +12,14 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen import expr
 from swarmgen.frontend.raw import RawElement
-from swarmgen.frontend.scxml_expr import ExprUnsupported, InState, Marker, conjuncts, translate
+from swarmgen.frontend.scxml_expr import (
+    ExprUnsupported,
+    InState,
+    Marker,
+    conjuncts,
+    literal,
+    translate,
+)
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, in_sg, local
 
 _NOT_IN_IR = {
@@ -79,6 +86,56 @@ class Actions:
             if lines:
                 self.body(vertex, feature, lines, children(node, source)[0])
         return call
+
+    def final_behaviour(self, node: etree._Element, vertex: RawElement) -> None:
+        """A `<final>`'s onentry and onexit (swarmgen's extension of UML's final state) and its
+        `<donedata>` `<param>`s as the entry's last action, `done(f = expr, ...)`."""
+        for source, feature in (("onentry", "entry"), ("onexit", "exit")):
+            blocks = children(node, source)
+            lines = [
+                line
+                for block in blocks
+                for kid in block.iterchildren(tag=etree.Element)
+                for line in self.action(kid)
+            ]
+            if source == "onentry":
+                lines += self.donedata(node)
+            if lines:
+                self.body(vertex, feature, lines, blocks[0] if blocks else node)
+
+    def donedata(self, node: etree._Element) -> list[str]:
+        """`<donedata>` with `<param name expr|location>`s: `done(name = expr, ...)`."""
+        found: list[str] = []
+        for block in children(node, "donedata"):
+            contents = children(block, "content")
+            if contents:  # the whole data: `done(expr)`
+                content = contents[0]
+                text = content.get("expr")
+                if text is None and not len(content):  # inline: JSON, else the text itself
+                    inline = (content.text or "").strip()
+                    try:
+                        constant = literal(inline)
+                    except ExprUnsupported:
+                        constant = inline
+                    if not isinstance(constant, bool | int | float | str) or constant is None:
+                        constant = inline
+                    text = expr.to_ecmascript(expr.Const(value=constant))
+                value = self.text(text, content) if text is not None else None
+                if value is None and len(content):
+                    why = "a <content> is an expression, not XML"
+                    self.b.report(dg.SCXML_UNSUPPORTED, content, element="content", why=why)
+                found += [f"done({value})"] if value is not None else []
+                continue
+            fields = []
+            for param in children(block, "param"):
+                given = (
+                    param.get("expr") if param.get("expr") is not None else param.get("location")
+                )
+                value = self.text(str(given or ""), param)
+                if value is not None:
+                    fields.append(f"{param.get('name')} = {value}")
+            found.append(f"done({', '.join(fields)})")
+        return found
 
     def timer(self, node: etree._Element) -> bool:
         """`<send event="after.S.n" id=... delay="Nms"/>`: the emitted time-event pattern."""
@@ -362,6 +419,10 @@ class Actions:
                 found.append(("*", self.any_ref()))
             elif event.removesuffix(".*") in ("error", "error.execution", "error.communication"):
                 found.append((event.removesuffix(".*"), None))
+            elif event.removesuffix(".*") in ("done", "done.state") or (
+                event.startswith("done.state.") and len(event) > 11
+            ):
+                found.append((event.removesuffix(".*"), None))  # another state's completion
             elif (
                 event.split(".")[0] in ("done", "error", "outcome", "after") or event in triggerless
             ):

@@ -158,7 +158,7 @@ class States:
             self.vertices[ident] = self.b.make(
                 "subvertex", "FinalState", region, node, {"name": name}, ident
             )
-            self.unsupported_children(node, "onentry", "onexit", "donedata")
+            self.actions.final_behaviour(node, self.vertices[ident])
         elif tag == "history":
             self.history(node, region, ident, name)
         elif tag == "state" and _root_initial(node, ident):

@@ -38,6 +38,8 @@ def action_text(action: expr.Action) -> str:
             return f"cancel {action.sendid}"
         case expr.If():
             return _if_text(action)
+        case expr.Done():
+            return f"done({_args_text(action.args)})"
         case expr.ForEach():
             names = action.item + (f", {action.index}" if action.index else "")
             body = "; ".join(action_text(a) for a in action.actions)

@@ -176,6 +176,10 @@ def _named_trigger(
         return Trigger(kind=TriggerKind.EVENT, name=event.name, event=event.id, span=element.span)
     if name.removesuffix(".*") in ERROR_EVENTS:  # W3C's platform errors (docs/semantics.md)
         return Trigger(kind=TriggerKind.ERROR, name=name.removesuffix(".*"), span=element.span)
+    done = name.removesuffix(".*")
+    if done in ("done", "done.state") or (done.startswith("done.state.") and len(done) > 11):
+        # another state's completion (its own is a triggerless transition): docs/semantics.md
+        return Trigger(kind=TriggerKind.DONE, name=done, span=element.span)
     if name in DEFAULT_OUTCOMES or behaviour is not None:
         return Trigger(kind=TriggerKind.OUTCOME, name=name, span=element.span)
     if not name:

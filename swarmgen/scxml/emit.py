@@ -272,6 +272,10 @@ class _Writer:
             return
         self.onentry(element, node)
         self.onexit(element, node)
+        if node.donedata:  # a final state's: the fields of its done.state event
+            self.params(_sub(element, "donedata"), node.donedata, "param")
+        elif node.donecontent is not None:  # or its whole data
+            _sub(_sub(element, "donedata"), "content", {"expr": self.js(node.donecontent)})
         if node.call is not None:
             self.finalize(element, node.id, node.call)
         for transition in node.transitions:

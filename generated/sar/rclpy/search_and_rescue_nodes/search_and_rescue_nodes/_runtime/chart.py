@@ -215,6 +215,7 @@ class Node:
     onexit: Action | None = None
     call: Call | None = None
     timers: tuple[tuple[str, int], ...] = ()  # (event, delay in ms)
+    donedata: Callable[[Context], Any] | None = None  # a final state's done data
     order: int = 0  # document order
     depth: int = 0
     ancestors: tuple[Node, ...] = ()  # proper ancestors, innermost first (root included)
@@ -413,8 +414,10 @@ class ChartBuilder:
         call: Call | None = None,
         timers: Sequence[tuple[str, int]] = (),
         history: str = "",
+        donedata: Callable[[Context], Any] | None = None,
     ) -> None:
-        """Declare a node under `parent` (None: the root), after its parent."""
+        """Declare a node under `parent` (None: the root), after its parent; a final state's
+        `donedata` gives the fields of the done.state event entering it raises."""
         if node_id in self._nodes or not node_id:
             raise ValueError(f"duplicate or empty node id {node_id!r}")
         owner = self._nodes[parent] if parent is not None else self._root
@@ -423,6 +426,7 @@ class ChartBuilder:
         )
         node.timers = tuple(timers)
         node.history = history
+        node.donedata = donedata
         owner.children.append(node)
         self._nodes[node_id] = node
         self._names[node_id] = name or node_id

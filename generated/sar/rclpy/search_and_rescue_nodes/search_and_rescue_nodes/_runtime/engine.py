@@ -368,7 +368,8 @@ class Engine:
             self.finished = True
             self._exit_everything()
             return
-        self.internal.append(self.make_event(f"done.state.{parent.id}", kind="platform"))
+        data = self._done_data(state) if state.donedata is not None else None
+        self.internal.append(self.make_event(f"done.state.{parent.id}", data, kind="platform"))
         grandparent = parent.parent
         if (
             grandparent is not None
@@ -376,6 +377,16 @@ class Engine:
             and all(in_final(c, self.config) for c in grandparent.children if c.kind != "history")
         ):
             self.internal.append(self.make_event(f"done.state.{grandparent.id}", kind="platform"))
+
+    def _done_data(self, state: Node) -> Any:
+        """A final state's done data; one that fails raises error.execution (before the done
+        event) and the event carries none (W3C 5.5: `<donedata>`)."""
+        assert state.donedata is not None
+        try:
+            return state.donedata(self.ctx)
+        except Exception as err:
+            self._error(f"done data of {state.id}", err)
+            return None
 
     def _exit_everything(self) -> None:
         """The machine is done: behaviours are cancelled and exit actions run; the final
@@ -424,7 +435,7 @@ def event_fields(event: Event) -> Record:
     timer = name.startswith("after.")
     sendid = name if timer else (event.sendid or "")
     sent = timer or event.sendid is not None or event.kind == "raised"
-    data = event.data
+    data: Any = event.data  # a Record, or any value a final state's done(expr) gave
     return Record(
         name=name,
         type=_TYPES.get(event.kind, "external"),
@@ -432,5 +443,5 @@ def event_fields(event: Event) -> Record:
         origin="#_internal" if sent else "",
         origintype=PROCESSOR if sent else "",
         invokeid="",
-        data=data if isinstance(data, Record) else Record(),
+        data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
     )
