@@ -13,6 +13,7 @@ import pytest
 
 from swarmgen import expr, pipeline, replay
 from swarmgen.conformance import irp
+from swarmgen.runtime.engine import Engine
 from swarmgen.scxml.emit import serialize
 from tests.modelkit import ModelKit
 
@@ -134,3 +135,30 @@ def test_error_events_in_a_document_take_transitions(tmp_path: Path, qt_availabl
     source.write_text(ERRORS, encoding="utf-8")
     ends = {b: replay.replay(source, "Errs", [], b)[-1]["active"] for b in BACKENDS}
     assert ends == {b: ["pass_"] for b in BACKENDS}
+
+
+LOGGING = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Logs">
+  <datamodel><data id="x" expr="2"/></datamodel>
+  <state id="s0">
+    <onentry><log label="only a label"/><log label="x is" expr="x * 10"/><log expr="x / 0"/>
+      <assign location="x" expr="3"/></onentry>
+  </state>
+</scxml>
+"""
+
+
+def test_log_goes_to_the_log_and_changes_nothing(tmp_path: Path, qt_available: None) -> None:
+    """`log "label", expr` (W3C <log>): the value to the engine's `on_log`; one that fails is
+    error.execution and ends its block; the traces (no log in them) agree everywhere."""
+    source = tmp_path / "logs.scxml"
+    source.write_text(LOGGING, encoding="utf-8")
+    (log,) = expr.parse_actions('log "x is", x * 10')
+    assert isinstance(log, expr.Log) and log.label == "x is"
+    ends = {b: replay.replay(source, "Logs", [], b)[-1] for b in BACKENDS}
+    assert ends["asyncio"] == ends["smach"] == ends["scxml"]
+    assert (ends["scxml"]["data"], ends["scxml"]["errors"]) == ({"x": 2}, 1)
+    chart = irp.build(pipeline.validate(source).charts[0])
+    logged: list[tuple[str, object]] = []
+    engine = Engine(chart, on_log=lambda label, value: logged.append((label, value)))
+    engine.start()
+    assert logged == [("only a label", ""), ("x is", 20)]

@@ -223,6 +223,8 @@ class ChartRenderer:
             return [f"ctx.{method}({action.event!r}, {data})"]
         if isinstance(action, c.Cancel):
             return [f"ctx.cancel({action.sendid!r})"]
+        if isinstance(action, c.Log):
+            return [f"ctx.log({action.label!r}, {_unwrap(self.py(action.value))})"]
         if isinstance(action, c.If):
             return self._if_lines(action)
         if isinstance(action, c.ForEach):

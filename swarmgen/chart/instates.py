@@ -57,6 +57,8 @@ def _action_exprs(action: c.Action) -> list[expr.Expr]:
         return [cond for cond, _ in action.branches if cond is not None]
     if isinstance(action, c.ForEach):
         return [action.array]
+    if isinstance(action, c.Log):
+        return [action.value]
     if isinstance(action, c.Raise | c.Send):
         found = [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
         if isinstance(action, c.Raise) and action.delay is not None:
@@ -96,6 +98,8 @@ def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action
             for cond, inner in action.branches
         )
         return c.If(branches)
+    if isinstance(action, c.Log):
+        return replace(action, value=fix(action.value))
     if isinstance(action, c.ForEach):
         inner_actions = tuple(_action(a, fix) for a in action.actions)
         return replace(action, array=fix(action.array), actions=inner_actions)

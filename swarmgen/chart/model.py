@@ -96,7 +96,15 @@ class ForEach:
     actions: tuple[Action, ...]
 
 
-Action = Assign | Raise | Send | Cancel | If | ForEach | Opaque
+@dataclass(frozen=True, slots=True)
+class Log:
+    """`log label, value`: to the member's log (no state or trace change)."""
+
+    label: str
+    value: expr.Expr
+
+
+Action = Assign | Raise | Send | Cancel | If | ForEach | Log | Opaque
 
 
 def flat(actions: tuple[Action, ...]) -> list[Action]:

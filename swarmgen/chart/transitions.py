@@ -252,6 +252,9 @@ class Transitions(Context):
                 continue
             if isinstance(action, expr.Done):  # a final state's done data: `donedata`
                 continue
+            if isinstance(action, expr.Log):
+                lowered.append(c.Log(action.label, action.value))
+                continue
             if isinstance(action, expr.If):
                 lowered.append(self._if(action))
                 continue

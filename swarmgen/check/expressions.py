@@ -171,7 +171,7 @@ def _actions(
             for target in (action.item, action.index):
                 if target is not None and target not in scope:
                     found.append(_unknown_name(span, "assigns", what, target, scope))
-        if isinstance(action, expr.Cancel | expr.If | expr.ForEach):
+        if isinstance(action, expr.Cancel | expr.If | expr.ForEach | expr.Log):
             for value in expr.action_exprs(action):
                 found.extend(_names(value, scope, fields, span, what))
             continue

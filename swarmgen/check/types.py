@@ -251,6 +251,9 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
         return
     if isinstance(action, expr.Done):  # refused outside a final state (check.expressions)
         return
+    if isinstance(action, expr.Log):
+        typer.infer(action.value)
+        return
     if isinstance(action, expr.If):
         for branch in action.branches:
             if branch.cond is not None:

@@ -38,6 +38,7 @@ from swarmgen.expr.tree import (
     If,
     InState,
     ListOf,
+    Log,
     Name,
     Raise,
     Send,
@@ -394,9 +395,11 @@ class _Parser:
         # `send = 1` assigns member data named `send`
         if (
             tok.kind == "word"
-            and tok.text in ("raise", "send", "cancel", "if", "for", "done")
+            and tok.text in ("raise", "send", "cancel", "if", "for", "done", "log")
             and not self.is_op("=", self.peek(1))
         ):
+            if tok.text == "log":
+                return self.log()
             if tok.text == "done":
                 self.advance()
                 if not self.is_op("(", self.peek()):
@@ -441,6 +444,18 @@ class _Parser:
                 )
         self.nest -= 1
         return If(branches=tuple(branches))
+
+    def log(self) -> Log:
+        """`log expr` or `log "label", expr`."""
+        self.advance()
+        first, _ = self.expr(0)
+        if not self.is_op(",", self.peek()):
+            return Log(value=first)
+        comma = self.advance()
+        if not (isinstance(first, Const) and isinstance(first.value, str)):
+            self.fail(comma, 'a log\'s label is a string: log "label", expr')
+        value, _ = self.expr(0)
+        return Log(label=first.value, value=value)
 
     def loop(self) -> ForEach:
         """`for item[, index] in array do ... end`."""

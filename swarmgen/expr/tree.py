@@ -247,6 +247,15 @@ class Done(_Model):
     content: Operand | None = None  # `done(expr)`: the event's data is this value (W3C <content>)
 
 
+class Log(_Model):
+    """``log [label,] expr``: the value goes to the member's log (W3C `<log>`); no trace or
+    state changes, an expression that fails raises error.execution as any other."""
+
+    kind: Literal["log"] = "log"
+    label: str = ""
+    value: Operand
+
+
 class Cancel(_Model):
     """``cancel <name>``: drop the delayed events raised `as <name>` that are still pending."""
 
@@ -281,7 +290,7 @@ class ForEach(_Model):
 
 
 Action = Annotated[
-    Assign | Raise | Send | Cancel | If | ForEach | Done, Field(discriminator="kind")
+    Assign | Raise | Send | Cancel | If | ForEach | Done | Log, Field(discriminator="kind")
 ]
 
 Branch.model_rebuild()
@@ -387,6 +396,9 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     changes)."""
     if isinstance(action, Cancel):
         return action
+    if isinstance(action, Log):
+        value = rewrite(action.value)
+        return action if value is action.value else Log(label=action.label, value=value)
     if isinstance(action, Done):
         values = [rewrite(a.value) for a in action.args]
         content = rewrite(action.content) if action.content is not None else None
@@ -439,6 +451,8 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
         return (action.array,)
     if isinstance(action, Done):
         return (*(a.value for a in action.args), *([action.content] if action.content else []))
+    if isinstance(action, Log):
+        return (action.value,)
     if isinstance(action, Assign):
         return (action.value,)
     found = tuple(a.value for a in action.args)

@@ -26,7 +26,6 @@ _NOT_IN_IR = {
     "elseif": "<elseif> is read only inside <if>",
     "else": "<else> is read only inside <if>",
     "foreach": "loops are not in the IR yet",
-    "log": "logging is not in the IR yet",
     "script": "scripts other than swarmgen's $sg support script are not run",
     "invoke": "invoking other sessions is not in the IR",
 }
@@ -227,6 +226,13 @@ class Actions:
             return self.conditional(node)
         if tag == "foreach":
             return self.loop(node)
+        if tag == "log":  # `log "label", expr` (a log without expr logs its label)
+            label = str(node.get("label", ""))
+            value = self.text(str(node.get("expr")), node) if node.get("expr") else '""'
+            if value is None:
+                return []
+            quoted = expr.to_text(expr.Const(value=label))
+            return [f"log {quoted}, {value}" if label else f"log {value}"]
         self.b.report(
             dg.SCXML_UNSUPPORTED,
             node,

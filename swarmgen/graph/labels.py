@@ -38,6 +38,9 @@ def action_text(action: expr.Action) -> str:
             return f"cancel {action.sendid}"
         case expr.If():
             return _if_text(action)
+        case expr.Log():
+            label = f"{expr.to_text(expr.Const(value=action.label))}, " if action.label else ""
+            return f"log {label}{expr.to_text(action.value)}"
         case expr.Done():
             return f"done({_args_text(action.args)})"
         case expr.ForEach():

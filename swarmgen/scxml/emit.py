@@ -390,6 +390,9 @@ class _Writer:
                 self.params(send, action.params, _sg("param"))
             elif isinstance(action, c.Cancel):
                 _sub(parent, "cancel", {"sendid": action.sendid})
+            elif isinstance(action, c.Log):
+                attrs = {"label": action.label} if action.label else {}
+                _sub(parent, "log", {**attrs, "expr": self.js(action.value)})
             elif isinstance(action, c.If):
                 self.conditional(parent, action)
             elif isinstance(action, c.ForEach):
@@ -525,6 +528,8 @@ def _expressions_of(node: c.Node) -> list[expr.Expr]:
             found += [cond for cond, _ in action.branches if cond is not None]
         elif isinstance(action, c.ForEach):
             found.append(action.array)
+        elif isinstance(action, c.Log):
+            found.append(action.value)
         elif isinstance(action, c.Raise | c.Send):
             found += [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
     if node.call is not None:

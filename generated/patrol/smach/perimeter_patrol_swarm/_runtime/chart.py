@@ -362,6 +362,10 @@ class Context:
             self._engine.execution_error("condition of an if", err)
             return False
 
+    def log(self, label: str, value: Any) -> None:
+        """`log label, value`: to the member's log (the engine's `on_log`)."""
+        self._engine.log(label, value)
+
     def cancel(self, sendid: str) -> None:
         """`cancel id`: the pending delayed events raised as `id` never arrive."""
         self._engine.cancel_delayed(sendid)

@@ -11,6 +11,7 @@ cancelled activations.
 from __future__ import annotations
 
 import itertools
+import logging
 import time
 from collections import deque
 from collections.abc import Callable, Mapping
@@ -45,6 +46,7 @@ class Engine:
     member_id: str = ""
     clock: Callable[[], float] = time.time
     on_error: Callable[[str, BaseException], None] | None = None
+    on_log: Callable[[str, Any], None] | None = None  # `log label, value` (else `logging`)
 
     def __post_init__(self) -> None:
         self.data = self.chart.fresh_data()
@@ -187,6 +189,14 @@ class Engine:
         if event is None:
             raise NameError("_event is not bound before the first event")
         return event_fields(event)
+
+    def log(self, label: str, value: Any) -> None:
+        """`log`: to `on_log` when the host set one, else to Python's `logging` (INFO, logger
+        `swarmgen.log.<chart>`); it changes no state and no trace."""
+        if self.on_log is not None:
+            self.on_log(label, value)
+        else:
+            logging.getLogger(f"swarmgen.log.{self.chart.name}").info("%s: %r", label, value)
 
     def execution_error(self, where: str, err: BaseException) -> None:
         """An expression of executable content failed where the block goes on (an `if`
