@@ -121,8 +121,8 @@ BAD = {
     "else-outside-if": (_doc('<state id="A"><onentry><else/></onentry></state>'), "SG060", 2),
     "invoke": (_doc('<state id="A"><invoke type="http"/></state>'), "SG060", 2),
     "script": (_doc('<script>x = 1;</script>\n<state id="A"/>'), "SG060", 2),
-    "send-external-target": (
-        _doc('<state id="A"><onentry><send event="e" target="http://a/b"/></onentry></state>'),
+    "send-other-processor": (
+        _doc('<state id="A"><onentry><send event="e" type="http://a/b"/></onentry></state>'),
         "SG060",
         2,
     ),

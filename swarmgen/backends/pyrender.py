@@ -218,6 +218,11 @@ class ChartRenderer:
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
             data = data if action.params else "None"
+            if isinstance(action, c.Raise) and action.target is not None:
+                target = _unwrap(self.py(action.target))
+                ms = self._delay_ms(action.delay) if action.delay is not None else "0"
+                call = f"ctx.raise_to({action.event!r}, {data}, {target}, {ms}, {action.sendid!r})"
+                return [call]
             if isinstance(action, c.Raise) and action.delay is not None:
                 return [self._delayed(action, action.delay, data)]
             return [f"ctx.{method}({action.event!r}, {data})"]
@@ -251,11 +256,15 @@ class ChartRenderer:
 
     def _delayed(self, action: c.Raise, delay: c.Delay, data: str) -> str:
         """`raise e after ...` with its delay in milliseconds."""
-        amount = _unwrap(self.py(delay.amount))
-        ms = {"ms": amount, "s": f"({amount}) * 1000", "": f"ctx.duration({amount})"}[delay.unit]
-        if delay.unit == "s" and isinstance(delay.amount, expr.Const):
-            ms = f"{amount} * 1000"
+        ms = self._delay_ms(delay)
         return f"ctx.raise_later({action.event!r}, {data}, {ms}, {action.sendid!r})"
+
+    def _delay_ms(self, delay: c.Delay) -> str:
+        """A delay as Python computing milliseconds."""
+        amount = _unwrap(self.py(delay.amount))
+        if delay.unit == "s" and isinstance(delay.amount, expr.Const):
+            return f"{amount} * 1000"
+        return {"ms": amount, "s": f"({amount}) * 1000", "": f"ctx.duration({amount})"}[delay.unit]
 
     def _hooks(self, node: c.Node) -> list[str]:
         """The `onentry=` and `onexit=` options of a state (its action functions, if any), and

@@ -52,7 +52,11 @@ def raised(actions: Iterable[Action]) -> set[str]:
     """Events these actions put on the member's own queues: `raise e` on the internal queue,
     `raise e(f = ...)` at the back of its external queue (the step bound counts through those
     too: docs/semantics.md)."""
-    return {a.event for a in flat(tuple(actions)) if isinstance(a, Raise) and a.delay is None}
+    return {
+        a.event
+        for a in flat(tuple(actions))
+        if isinstance(a, Raise) and a.delay is None and a.target is None
+    }
 
 
 def dot_prefixes(names: Iterable[str]) -> set[str]:

@@ -63,6 +63,8 @@ def _action_exprs(action: c.Action) -> list[expr.Expr]:
         found = [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
         if isinstance(action, c.Raise) and action.delay is not None:
             found.append(action.delay.amount)
+        if isinstance(action, c.Raise) and action.target is not None:
+            found.append(action.target)
         return found
     return []
 
@@ -108,8 +110,9 @@ def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action
             p if isinstance(p.value, c.FieldDefault) else replace(p, value=fix(p.value))
             for p in action.params
         )
-        if isinstance(action, c.Raise) and action.delay is not None:
-            delay = replace(action.delay, amount=fix(action.delay.amount))
-            return replace(action, params=params, delay=delay)
+        if isinstance(action, c.Raise):
+            delay = replace(action.delay, amount=fix(action.delay.amount)) if action.delay else None
+            target = fix(action.target) if action.target is not None else None
+            return replace(action, params=params, delay=delay, target=target)
         return replace(action, params=params)
     return action

@@ -54,6 +54,7 @@ class Raise:
     params: tuple[Param, ...] = ()
     delay: Delay | None = None
     sendid: str | None = None
+    target: expr.Expr | None = None  # W3C's <send target> (docs/semantics.md, "Targets")
 
 
 @dataclass(frozen=True, slots=True)

@@ -273,6 +273,7 @@ class Transitions(Context):
                         params,
                         c.Delay(delay.amount, delay.unit) if delay is not None else None,
                         action.sendid,
+                        action.target,
                     )
                 )
             else:

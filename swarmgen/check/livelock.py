@@ -281,7 +281,12 @@ class _Run:
         step bound (a loop that never ends its macrostep never lets it be taken either)."""
         found = []
         for action in expr.flat(actions):
-            if isinstance(action, expr.Raise) and not action.args and action.delay is None:
+            if (
+                isinstance(action, expr.Raise)
+                and not action.args
+                and action.delay is None
+                and action.target is None
+            ):
                 event = self.index.events_by_name.get(action.event)
                 if event is None or not event.fields:
                     found.append(event.ident if event is not None else identifier(action.event))

@@ -261,6 +261,10 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
             for inner in branch.actions:
                 _action(index, typer, inner, datatypes)
         return
+    if isinstance(action, expr.Raise) and action.target is not None:
+        target = typer.infer(action.target)
+        if target is not None and target != "string":
+            typer.errors.append(f"the target of '{action.event}' is {_word(target)}, not a string")
     if isinstance(action, expr.Raise) and action.delay is not None:
         amount = typer.infer(action.delay.amount)
         wanted = "string" if not action.delay.unit else "number"

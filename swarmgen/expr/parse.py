@@ -559,13 +559,15 @@ class _Parser:
             self.fail(name, f"expected an event name after '{verb.text}'")
         self.advance()
         args = self.arguments() if self.is_op("(", self.peek()) else ()
+        target = None
+        if self.is_word("to", self.peek()) and verb.text == "raise":
+            self.advance()
+            target, _ = self.expr(0)
         after = self.peek()
         if not self.is_word("after", after):
-            return (
-                Raise(event=name.text, args=args)
-                if verb.text == "raise"
-                else Send(event=name.text, args=args)
-            )
+            if verb.text == "raise":
+                return Raise(event=name.text, args=args, target=target)
+            return Send(event=name.text, args=args)
         if verb.text != "raise":
             self.fail(
                 after,
@@ -582,7 +584,7 @@ class _Parser:
                 self.fail(tok, "expected a send id after 'as'", hint="`raise e after 1 s as t`")
             self.advance()
             sendid = tok.text
-        return Raise(event=name.text, args=args, delay=delay, sendid=sendid)
+        return Raise(event=name.text, args=args, delay=delay, sendid=sendid, target=target)
 
     @staticmethod
     def is_word(text: str, tok: Tok) -> bool:

@@ -228,6 +228,9 @@ class Raise(_Model):
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
     delay: Delay | None = None
     sendid: Ident | None = None  # `as <name>`: what `cancel <name>` names
+    # `to <expr>`: W3C's <send target>: this member's session (`"#_scxml_" + _sessionid`), or
+    # `"#_internal"`; another session is error.communication, anything else error.execution
+    target: Operand | None = None
 
 
 class Send(_Model):
@@ -428,8 +431,12 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     values = [rewrite(a.value) for a in action.args]
     delay = action.delay if isinstance(action, Raise) else None
     amount = rewrite(delay.amount) if delay is not None else None
-    if all(v is a.value for v, a in zip(values, action.args, strict=True)) and (
-        delay is None or amount is delay.amount
+    given = action.target if isinstance(action, Raise) else None
+    target = rewrite(given) if given is not None else None
+    if (
+        all(v is a.value for v, a in zip(values, action.args, strict=True))
+        and (delay is None or amount is delay.amount)
+        and target is given
     ):
         return action
     args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
@@ -437,7 +444,7 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
         return Send(event=action.event, args=args)
     if delay is not None and amount is not None:
         delay = Delay(amount=amount, unit=delay.unit)
-    return Raise(event=action.event, args=args, delay=delay, sendid=action.sendid)
+    return Raise(event=action.event, args=args, delay=delay, sendid=action.sendid, target=target)
 
 
 def action_exprs(action: Action) -> tuple[Expr, ...]:
@@ -458,6 +465,8 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
     found = tuple(a.value for a in action.args)
     if isinstance(action, Raise) and action.delay is not None:
         found = (action.delay.amount, *found)
+    if isinstance(action, Raise) and action.target is not None:
+        found = (action.target, *found)
     return found
 
 

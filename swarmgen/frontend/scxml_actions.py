@@ -250,14 +250,27 @@ class Actions:
             self.b.report(dg.SCXML_UNSUPPORTED, node, element="send", why=why)
             return []
         lines = self.event_action(node, "raise", children(node, "param"))
-        delayed = node.get("target") is None or {"delay", "delayexpr"} & set(node.attrib)
-        if not lines or not delayed:
+        target, targetexpr = node.get("target"), node.get("targetexpr")
+        to = ""
+        if targetexpr is not None or target not in (None, "#_internal"):
+            text = (
+                self.text(targetexpr, node)
+                if targetexpr is not None
+                else expr.to_text(expr.Const(value=str(target)))
+            )
+            if text is None:
+                return []
+            to = f" to ({text})"  # W3C's <send target>: docs/semantics.md, "Targets"
+        delayed = target is None or {"delay", "delayexpr"} & set(node.attrib)
+        if not lines or not (delayed or to):
             return lines
+        if to and not {"delay", "delayexpr"} & set(node.attrib):
+            return [f"{lines[0]}{to}"]
         delay = self.delay(node)
         if delay is None:
             return []
         sendid = node.get("id")
-        return [f"{lines[0]} after {delay}" + (f" as {sendid}" if sendid else "")]
+        return [f"{lines[0]}{to} after {delay}" + (f" as {sendid}" if sendid else "")]
 
     def delay(self, node: etree._Element) -> str | None:
         """The `after` of a delayed send: `N ms`/`N s` from `delay`, an expression from
@@ -445,16 +458,16 @@ _LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
 # what swarmgen's emitter writes for a computed delay (docs/scxml.md)
 _OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
 _PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
-_UNREAD_SEND = ("typeexpr", "targetexpr", "eventexpr", "idlocation")
+_UNREAD_SEND = ("typeexpr", "eventexpr", "idlocation")
 
 
 def _unread_send(node: etree._Element) -> str | None:
     """Why swarmgen does not read this `<send>`, or None."""
-    target, sendid = node.get("target"), node.get("id")
-    if target not in (None, "#_internal") or node.get("type") not in (None, _PROCESSOR):
-        return "a send to another target or I/O processor is not in the IR"
+    sendid = node.get("id")
+    if node.get("type") not in (None, _PROCESSOR):
+        return "a send through another I/O processor is not in the IR"
     if any(node.get(a) is not None for a in _UNREAD_SEND) or children(node, "content"):
-        return "typeexpr, targetexpr, eventexpr, idlocation and <content> are not in the IR yet"
+        return "typeexpr, eventexpr, idlocation and <content> are not in the IR yet"
     if not all(n.isidentifier() for n in str(node.get("namelist", "")).split()):
         return "a namelist names data ids"
     if sendid is not None and (not sendid.isidentifier() or sendid.startswith("__")):

@@ -62,11 +62,14 @@ def _if_text(action: expr.If) -> str:
 
 
 def _delay_text(action: expr.Raise | expr.Send) -> str:
-    if not isinstance(action, expr.Raise) or action.delay is None:
+    if not isinstance(action, expr.Raise):
         return ""
+    to = f" to {expr.to_text(action.target)}" if action.target is not None else ""
+    if action.delay is None:
+        return to
     unit = f" {action.delay.unit}" if action.delay.unit else ""
     named = f" as {action.sendid}" if action.sendid else ""
-    return f" after {expr.to_text(action.delay.amount)}{unit}{named}"
+    return f"{to} after {expr.to_text(action.delay.amount)}{unit}{named}"
 
 
 def actions_text(actions: Iterable[expr.Action], opaque: Iterable[ir.OpaqueCode]) -> str:

@@ -375,7 +375,9 @@ class _Writer:
         for action in actions:
             if isinstance(action, c.Assign):
                 _sub(parent, "assign", {"location": action.location, "expr": self.js(action.value)})
-            elif isinstance(action, c.Raise) and action.delay is not None:
+            elif isinstance(action, c.Raise) and (
+                action.delay is not None or action.target is not None
+            ):
                 self.params(self.delayed(parent, action, action.delay), action.params, "param")
             elif isinstance(action, c.Raise) and not action.params:
                 _sub(parent, "raise", {"event": action.event})
@@ -417,10 +419,19 @@ class _Writer:
                 _sub(element, "elseif", {"cond": self.js(cond)})
             self.actions(element, actions)
 
-    def delayed(self, parent: etree._Element, action: c.Raise, delay: c.Delay) -> etree._Element:
-        """`raise e after ...`: a `<send>` without target (the session's external queue)
-        with a literal `delay` when the delay is a constant, else a `delayexpr`."""
+    def delayed(
+        self, parent: etree._Element, action: c.Raise, delay: c.Delay | None
+    ) -> etree._Element:
+        """`raise e [to t] after ...`: a `<send>` (without target: the session's external
+        queue) with a literal `delay` when the delay is a constant, else a `delayexpr`."""
         attrs = {"event": action.event}
+        target = action.target
+        if isinstance(target, expr.Const) and isinstance(target.value, str):
+            attrs["target"] = target.value
+        elif target is not None:
+            attrs["targetexpr"] = self.js(target)
+        if delay is None:
+            return _sub(parent, "send", attrs)
         amount = delay.amount
         literal = _literal_ms(delay)
         if literal is not None:  # Qt SCXML reads a literal delay in whole units only
@@ -532,6 +543,8 @@ def _expressions_of(node: c.Node) -> list[expr.Expr]:
             found.append(action.value)
         elif isinstance(action, c.Raise | c.Send):
             found += [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
+            if isinstance(action, c.Raise) and action.target is not None:
+                found.append(action.target)
     if node.call is not None:
         found += [a.value for a in node.call.args]
     return found

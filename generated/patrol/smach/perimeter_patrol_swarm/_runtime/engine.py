@@ -23,6 +23,7 @@ from .chart import (
     OUTCOME_PREFIX,
     STEP_BOUND,
     Chart,
+    CommunicationError,
     Context,
     Node,
     Record,
@@ -202,6 +203,28 @@ class Engine:
         """An expression of executable content failed where the block goes on (an `if`
         condition): error.execution, counted and reported as every other."""
         self._error(where, err)
+
+    def raise_targeted(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None,
+        target: Any,
+        delay_ms: Any,
+        sendid: str | None,
+    ) -> None:
+        """`raise e to target`: `#_internal` is `raise e` (delays are for sessions); this
+        session's `#_scxml_<_sessionid>` its external queue, as a delayed raise; another
+        session's is error.communication (swarmgen reaches no other session; as every error
+        of executable content it ends the block, W3C 4.9, as in Qt SCXML); anything else is
+        no target: error.execution, the block ends."""
+        if target == "#_internal" and not delay_ms:
+            self.raise_internal(name, data)
+        elif target == f"#_scxml_{self.session_id}":
+            self.raise_delayed(name, data, delay_ms, sendid)
+        elif isinstance(target, str) and target.startswith("#_scxml_"):
+            raise CommunicationError(f"no session {target[len('#_scxml_') :]!r} to send to")
+        else:
+            raise ValueError(f"{target!r} is not a target this member can send to")
 
     def cancel_delayed(self, sendid: str) -> None:
         """`cancel id`: the host drops the pending delayed events raised as `id`."""
@@ -424,9 +447,10 @@ class Engine:
             return None
 
     def _error(self, where: str, err: BaseException) -> None:
-        self.error_count += 1
+        self.error_count += 1  # error events raised: execution and communication (as Qt)
         # no data, as in Qt SCXML: `where` and the error go to the host (`on_error`)
-        self.internal.append(self.make_event("error.execution", None, kind="platform"))
+        name = "error.communication" if isinstance(err, CommunicationError) else "error.execution"
+        self.internal.append(self.make_event(name, None, kind="platform"))
         if self.on_error is not None:
             self.on_error(where, err)
 

@@ -147,7 +147,7 @@ def _record(number: int, step: Step | None, member: Member) -> dict[str, Any]:
         "input": describe(step) if step is not None else None,
         "active": member.active,
         "data": json.loads(json.dumps(member.engine.data, default=str)),
-        "errors": member.engine.error_count,  # error.execution so far (docs/semantics.md)
+        "errors": member.engine.error_count,  # error events so far (docs/semantics.md)
     }
 
 

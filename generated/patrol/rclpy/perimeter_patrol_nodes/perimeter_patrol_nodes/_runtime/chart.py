@@ -183,6 +183,10 @@ STEP_BOUND = 1000
 CACHE_LIMIT = 1024
 
 
+class CommunicationError(RuntimeError):
+    """An event that cannot be dispatched (a send to another session): error.communication."""
+
+
 class StepBoundExceeded(RuntimeError):
     """The error.execution of the step bound: a macrostep took bounded transitions more than
     STEP_BOUND times."""
@@ -365,6 +369,17 @@ class Context:
     def log(self, label: str, value: Any) -> None:
         """`log label, value`: to the member's log (the engine's `on_log`)."""
         self._engine.log(label, value)
+
+    def raise_to(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None,
+        target: Any,
+        delay_ms: Any,
+        sendid: str | None,
+    ) -> None:
+        """`raise e to target [after ...]`: W3C's `<send target>` (Engine.raise_targeted)."""
+        self._engine.raise_targeted(name, data, target, delay_ms, sendid)
 
     def cancel(self, sendid: str) -> None:
         """`cancel id`: the pending delayed events raised as `id` never arrive."""
