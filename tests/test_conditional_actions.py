@@ -162,3 +162,42 @@ def test_log_goes_to_the_log_and_changes_nothing(tmp_path: Path, qt_available: N
     engine = Engine(chart, on_log=lambda label, value: logged.append((label, value)))
     engine.start()
     assert logged == [("only a label", ""), ("x is", 20)]
+
+
+BLOCKS = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Blocks">
+  <datamodel><data id="n" expr="0"/></datamodel>
+  <state id="s0">
+    <onentry><assign location="n" expr="n + 1"/><assign location="n" expr="n / 0"/>
+      <assign location="n" expr="100"/></onentry>
+    <onentry><assign location="n" expr="n + 10"/></onentry>
+    <onexit><assign location="n" expr="n % 0"/></onexit>
+    <onexit><assign location="n" expr="n + 1000"/></onexit>
+    <transition event="go" target="s1"/>
+  </state>
+  <state id="s1"/>
+</scxml>
+"""
+
+
+def test_each_onentry_is_a_block_of_its_own(tmp_path: Path, qt_available: None) -> None:
+    """Several <onentry>/<onexit> are `block ... end`s: an error ends only its block."""
+    source = tmp_path / "blocks.scxml"
+    source.write_text(BLOCKS, encoding="utf-8")
+    traces = {b: replay.replay(source, "Blocks", [{"event": "go"}], b) for b in BACKENDS}
+    for backend, trace in traces.items():
+        assert trace == traces["scxml"], f"{backend} differs from Qt SCXML:\n{trace}"
+    assert [(r["data"]["n"], r["errors"]) for r in traces["scxml"]] == [(11, 1), (1011, 2)]
+    (block,) = expr.parse_actions("block x = 1 / 0; y = 2 end")
+    assert isinstance(block, expr.Block) and len(block.actions) == 2
+    kit = ModelKit("Misplaced")
+    kit.event("go", sender="station")
+    machine = kit.machine("BotMachine")
+    machine.initial("Idle")
+    machine.state("Idle", entry="block x = 1 end")
+    machine.transition("Idle", "Idle", "go", effect="block x = 2 end")
+    kit.member("Bot", machine, data={"x": ("Integer", None)})
+    kit.swarm("Swarm", {"Bot": 1})
+    model = tmp_path / "misplaced.xmi"
+    model.write_text(kit.xmi(), encoding="utf-8")
+    found = [d.message for d in pipeline.validate(model).diagnostics if d.code.id == "SG108"]
+    assert found == ["effect has a block where none may stand"]

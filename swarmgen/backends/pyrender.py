@@ -228,6 +228,12 @@ class ChartRenderer:
             return [f"ctx.{method}({action.event!r}, {data})"]
         if isinstance(action, c.Cancel):
             return [f"ctx.cancel({action.sendid!r})"]
+        if isinstance(action, c.Block):  # its own function: an error in it ends only it
+            reads = self._reads_data
+            inner = [line for each in action.actions for line in self._action_lines(each)]
+            name = self._function("action", inner or ["pass"])
+            self._reads_data = reads
+            return [f"ctx.block({name})"]
         if isinstance(action, c.Log):
             return [f"ctx.log({action.label!r}, {_unwrap(self.py(action.value))})"]
         if isinstance(action, c.If):

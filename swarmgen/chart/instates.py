@@ -102,6 +102,8 @@ def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action
         return c.If(branches)
     if isinstance(action, c.Log):
         return replace(action, value=fix(action.value))
+    if isinstance(action, c.Block):
+        return c.Block(tuple(_action(a, fix) for a in action.actions))
     if isinstance(action, c.ForEach):
         inner_actions = tuple(_action(a, fix) for a in action.actions)
         return replace(action, array=fix(action.array), actions=inner_actions)

@@ -105,7 +105,14 @@ class Log:
     value: expr.Expr
 
 
-Action = Assign | Raise | Send | Cancel | If | ForEach | Log | Opaque
+@dataclass(frozen=True, slots=True)
+class Block:
+    """`block ... end`: its own error scope (SCXML: an `<onentry>`/`<onexit>` of its own)."""
+
+    actions: tuple[Action, ...]
+
+
+Action = Assign | Raise | Send | Cancel | If | ForEach | Log | Block | Opaque
 
 
 def flat(actions: tuple[Action, ...]) -> list[Action]:
@@ -116,7 +123,7 @@ def flat(actions: tuple[Action, ...]) -> list[Action]:
         if isinstance(action, If):
             for _, inner in action.branches:
                 found += flat(inner)
-        if isinstance(action, ForEach):
+        if isinstance(action, ForEach | Block):
             found += flat(action.actions)
     return found
 

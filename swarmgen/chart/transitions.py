@@ -255,6 +255,9 @@ class Transitions(Context):
             if isinstance(action, expr.Log):
                 lowered.append(c.Log(action.label, action.value))
                 continue
+            if isinstance(action, expr.Block):
+                lowered.append(c.Block(self._actions(action.actions, ())))
+                continue
             if isinstance(action, expr.If):
                 lowered.append(self._if(action))
                 continue

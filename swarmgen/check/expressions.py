@@ -40,11 +40,35 @@ def check_expressions(model: Model) -> list[Diagnostic]:
                 for value in done:
                     if value is not None:
                         found.extend(_names(value, scope, _NO_EVENT, final.span, "done data"))
+        for transition in machine.transitions:
+            found.extend(_misplaced_blocks(transition.effect, transition.span, "effect", top=False))
+        for state in states.values():
+            for actions in (state.entry, state.exit):
+                found.extend(_misplaced_blocks(actions, state.span, "entry or exit action"))
         for state in states.values():
             found.extend(_actions(index, state.entry, scope, _NO_EVENT, state.span, "entry action"))
             found.extend(_actions(index, state.exit, scope, _NO_EVENT, state.span, "exit action"))
             found.extend(_bindings(index, state, scope))
     return found + _unknown_states(model)
+
+
+def _misplaced_blocks(
+    actions: tuple[expr.Action, ...], span: Span, what: str, top: bool = True
+) -> list[Diagnostic]:
+    """`block ... end` stands only at the top of an entry or exit behaviour (SCXML's separate
+    `<onentry>`/`<onexit>` elements; nothing else can spell it)."""
+    nested = [a for a in actions if not (top and isinstance(a, expr.Block))]
+    inner = [b for a in actions if isinstance(a, expr.Block) for b in a.actions]
+    if any(isinstance(a, expr.Block) for a in expr.flat((*nested, *inner))):
+        return [
+            dg.EFFECT_SYNTAX.at(
+                span,
+                what=what,
+                error="has a block where none may stand",
+                hint="`block ... end` stands only at the top of an entry or exit action",
+            )
+        ]
+    return []
 
 
 def _unknown_states(model: Model) -> list[Diagnostic]:
@@ -171,6 +195,8 @@ def _actions(
             for target in (action.item, action.index):
                 if target is not None and target not in scope:
                     found.append(_unknown_name(span, "assigns", what, target, scope))
+        if isinstance(action, expr.Block):
+            continue  # its actions follow (`flat`); where it stands: `_misplaced_blocks`
         if isinstance(action, expr.Cancel | expr.If | expr.ForEach | expr.Log):
             for value in expr.action_exprs(action):
                 found.extend(_names(value, scope, fields, span, what))

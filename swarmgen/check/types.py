@@ -254,6 +254,10 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
     if isinstance(action, expr.Log):
         typer.infer(action.value)
         return
+    if isinstance(action, expr.Block):
+        for inner in action.actions:
+            _action(index, typer, inner, datatypes)
+        return
     if isinstance(action, expr.If):
         for branch in action.branches:
             if branch.cond is not None:

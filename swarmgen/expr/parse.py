@@ -25,6 +25,7 @@ from swarmgen.expr.tree import (
     Binary,
     Binding,
     BinOp,
+    Block,
     Branch,
     Cancel,
     Const,
@@ -395,9 +396,20 @@ class _Parser:
         # `send = 1` assigns member data named `send`
         if (
             tok.kind == "word"
-            and tok.text in ("raise", "send", "cancel", "if", "for", "done", "log")
+            and tok.text in ("raise", "send", "cancel", "if", "for", "done", "log", "block")
             and not self.is_op("=", self.peek(1))
         ):
+            if tok.text == "block":
+                opening = self.advance()
+                self.enter(opening)
+                actions = self.block(opening)
+                closing = self.advance()
+                if closing.text != "end":
+                    self.fail(
+                        closing, f"'{closing.text}' in a block", hint="a block ends with 'end'"
+                    )
+                self.nest -= 1
+                return Block(actions=actions)
             if tok.text == "log":
                 return self.log()
             if tok.text == "done":

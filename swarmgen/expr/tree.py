@@ -281,6 +281,14 @@ class If(_Model):
     branches: tuple[Branch, ...]
 
 
+class Block(_Model):
+    """``block ... end``: an error in it ends only it (W3C: each `<onentry>`/`<onexit>` is a
+    block of its own); only at the top of an entry or exit behaviour."""
+
+    kind: Literal["block"] = "block"
+    actions: tuple[Action, ...] = ()
+
+
 class ForEach(_Model):
     """``for item[, index] in array do ... end``: the actions once per item of a copy of the
     sequence, `item` and `index` (from 0) written to member data first (W3C's `<foreach>`)."""
@@ -293,12 +301,14 @@ class ForEach(_Model):
 
 
 Action = Annotated[
-    Assign | Raise | Send | Cancel | If | ForEach | Done | Log, Field(discriminator="kind")
+    Assign | Raise | Send | Cancel | If | ForEach | Done | Log | Block,
+    Field(discriminator="kind"),
 ]
 
 Branch.model_rebuild()
 If.model_rebuild()
 ForEach.model_rebuild()
+Block.model_rebuild()
 
 
 def flat(actions: Iterable[Action]) -> Iterator[Action]:
@@ -308,7 +318,7 @@ def flat(actions: Iterable[Action]) -> Iterator[Action]:
         if isinstance(action, If):
             for branch in action.branches:
                 yield from flat(branch.actions)
-        if isinstance(action, ForEach):
+        if isinstance(action, ForEach | Block):
             yield from flat(action.actions)
 
 
@@ -411,6 +421,9 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
             return action
         args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
         return Done(args=args, content=content)
+    if isinstance(action, Block):
+        inner_actions = tuple(map_action(a, rewrite) for a in action.actions)
+        return action if inner_actions == action.actions else Block(actions=inner_actions)
     if isinstance(action, ForEach):
         array, inner = rewrite(action.array), tuple(map_action(a, rewrite) for a in action.actions)
         if array is action.array and inner == action.actions:
@@ -450,7 +463,7 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
 def action_exprs(action: Action) -> tuple[Expr, ...]:
     """The expressions an action evaluates itself (an `if`: its conditions, not its
     branches' actions: `flat` gives those), in evaluation order."""
-    if isinstance(action, Cancel):
+    if isinstance(action, Cancel | Block):
         return ()
     if isinstance(action, If):
         return tuple(b.cond for b in action.branches if b.cond is not None)

@@ -61,18 +61,20 @@ class Actions:
     def state_behaviour(self, node: etree._Element, vertex: RawElement) -> str | None:
         """onentry/onexit into entry/exit behaviours, the sg:call into the doActivity, timers
         remembered for the transitions. Returns the called behaviour's name."""
-        entry: list[str] = []
+        entries: list[list[str]] = []
         call: str | None = None
         for block in children(node, "onentry"):
+            entries.append([])
             for kid in block.iterchildren(tag=etree.Element):
                 if in_sg(kid) and local(kid) == "call":
                     call = self.call(kid, vertex)
                 elif in_scxml(kid) and local(kid) == "send" and self.timer(kid):
                     continue
                 else:
-                    entry.extend(self.action(kid))
-        exit_: list[str] = []
+                    entries[-1].extend(self.action(kid))
+        exits: list[list[str]] = []
         for block in children(node, "onexit"):
+            exits.append([])
             for kid in block.iterchildren(tag=etree.Element):
                 if (
                     in_scxml(kid)
@@ -80,7 +82,8 @@ class Actions:
                     and str(kid.get("sendid")) in self.timers
                 ):
                     continue
-                exit_.extend(self.action(kid))
+                exits[-1].extend(self.action(kid))
+        entry, exit_ = _blocked(entries), _blocked(exits)
         for feature, lines, source in (("entry", entry, "onentry"), ("exit", exit_, "onexit")):
             if lines:
                 self.body(vertex, feature, lines, children(node, source)[0])
@@ -473,3 +476,12 @@ def _unread_send(node: etree._Element) -> str | None:
     if sendid is not None and (not sendid.isidentifier() or sendid.startswith("__")):
         return "a send id is an identifier"
     return None
+
+
+def _blocked(blocks: list[list[str]]) -> list[str]:
+    """The lines of several `<onentry>` (`<onexit>`) elements: each a `block ... end` of its
+    own when more than one holds actions (W3C: an error ends only its block), else as they are."""
+    full = [lines for lines in blocks if lines]
+    if len(full) <= 1:
+        return full[0] if full else []
+    return [line for lines in full for line in ("block", *lines, "end")]

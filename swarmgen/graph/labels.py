@@ -38,6 +38,8 @@ def action_text(action: expr.Action) -> str:
             return f"cancel {action.sendid}"
         case expr.If():
             return _if_text(action)
+        case expr.Block():
+            return f"block {'; '.join(action_text(a) for a in action.actions)} end"
         case expr.Log():
             label = f"{expr.to_text(expr.Const(value=action.label))}, " if action.label else ""
             return f"log {label}{expr.to_text(action.value)}"

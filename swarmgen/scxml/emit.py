@@ -288,8 +288,8 @@ class _Writer:
     def onentry(self, element: etree._Element, node: c.Node) -> None:
         """The model's entry actions, then the behaviour and timers in a block of their own
         (an error in the model's actions ends only its block, never the timers)."""
-        if node.onentry:
-            self.actions(_sub(element, "onentry"), node.onentry)
+        for block in _blocks(node.onentry):
+            self.actions(_sub(element, "onentry"), block)
         if not (node.call or node.timers):
             return
         onentry = _sub(element, "onentry")
@@ -303,8 +303,8 @@ class _Writer:
             )
 
     def onexit(self, element: etree._Element, node: c.Node) -> None:
-        if node.onexit:
-            self.actions(_sub(element, "onexit"), node.onexit)
+        for block in _blocks(node.onexit):
+            self.actions(_sub(element, "onexit"), block)
         if node.timers:
             onexit = _sub(element, "onexit")
             for timer in node.timers:
@@ -392,6 +392,8 @@ class _Writer:
                 self.params(send, action.params, _sg("param"))
             elif isinstance(action, c.Cancel):
                 _sub(parent, "cancel", {"sendid": action.sendid})
+            elif isinstance(action, c.Block):  # only at the top of entry/exit (the check)
+                self.actions(parent, action.actions)
             elif isinstance(action, c.Log):
                 attrs = {"label": action.label} if action.label else {}
                 _sub(parent, "log", {**attrs, "expr": self.js(action.value)})
@@ -556,3 +558,21 @@ def _reads_event_fields(e: expr.Expr) -> bool:
         isinstance(s, expr.Attr) and isinstance(s.obj, expr.System) and s.obj.name == "_event"
         for s in expr.walk(e)
     )
+
+
+def _blocks(actions: tuple[c.Action, ...]) -> list[tuple[c.Action, ...]]:
+    """Entry or exit actions as the `<onentry>`/`<onexit>` elements that hold them: the
+    actions between blocks in one, each `block ... end` in one of its own."""
+    found: list[tuple[c.Action, ...]] = []
+    pending: list[c.Action] = []
+    for action in actions:
+        if isinstance(action, c.Block):
+            if pending:
+                found.append(tuple(pending))
+                pending = []
+            found.append(action.actions)
+        else:
+            pending.append(action)
+    if pending:
+        found.append(tuple(pending))
+    return found

@@ -366,6 +366,14 @@ class Context:
             self._engine.execution_error("condition of an if", err)
             return False
 
+    def block(self, actions: Action) -> None:
+        """`block ... end`: its actions; an error ends only them (error.execution), as each
+        `<onentry>`/`<onexit>` element is a block of its own in SCXML."""
+        try:
+            actions(self)
+        except Exception as err:
+            self._engine.execution_error("block", err)
+
     def log(self, label: str, value: Any) -> None:
         """`log label, value`: to the member's log (the engine's `on_log`)."""
         self._engine.log(label, value)
