@@ -144,3 +144,79 @@ def test_the_scxml_reader_reads_delays_and_cancels(tmp_path: Path) -> None:
         '<send event="end" delay="500ms"/>',
     ):
         assert piece in text, text
+
+
+def test_verify_explores_delayed_raises_and_their_cancellation(tmp_path: Path) -> None:
+    """`swarmgen verify` takes a pending delayed raise as an input that may come at any later
+    step (as a time event, delays not modelled): `ping` and `late` both come first in some
+    run, a cancelled one never comes; without Late's way out, Late is a deadlock (SG401)."""
+    from swarmgen.verify import run
+    from swarmgen.verify.explore import Budget
+
+    kit = ModelKit("Waiting")
+    kit.event("launch", sender="station")
+    kit.event("ping", {"n": "Integer"}, scope="local")
+    kit.event("late", scope="local")
+    machine = kit.machine("UAVMachine")
+    machine.initial("Idle")
+    machine.state("Idle")
+    machine.state("Waiting", entry="raise ping(n = 2) after 1 s as p\nraise late after 2 s as l")
+    machine.state("Late")
+    machine.final("Done")
+    machine.transition("Idle", "Waiting", "launch")
+    machine.transition("Waiting", "Done", "ping", guard="event.n == 2", effect="cancel l")
+    machine.transition("Waiting", "Late", "late")
+    kit.member("UAV", machine)
+    kit.swarm("Swarm", {"UAV": 1})
+    stuck = kit.xmi()
+    machine.transition("Late", "Done", "launch")
+    model = tmp_path / "waiting.xmi"
+    model.write_text(kit.xmi(), encoding="utf-8")
+    result = run.verify(model, Budget())
+    assert (result.exit_code, result.findings) == (run.VERIFIED, [])
+    model.write_text(stuck, encoding="utf-8")
+    result = run.verify(model, Budget())
+    found = [f.diagnostic.message for f in result.findings]
+    assert found == ["deadlock: UAV_1 in Late can never move again (shortest trace: 4 step(s))"]
+
+
+def test_simulate_delivers_delayed_raises_in_ticks(tmp_path: Path) -> None:
+    """In `swarmgen simulate` a delayed raise arrives after its delay in ticks: Work starts
+    Coverage only through `start` (after 500 ms), `never` (cancelled) does not come."""
+    from swarmgen.sim import scenario as sc
+    from swarmgen.sim.machines import compile_machines
+    from swarmgen.sim.sweep import simulate
+
+    kit = ModelKit("Delayed")
+    kit.hardware("Camera", "Sensor")
+    kit.behaviour("Coverage", requires=["Camera"])
+    kit.event("launch", sender="station")
+    kit.event("start", scope="local")
+    kit.event("never", scope="local")
+    machine = kit.machine("Mission")
+    machine.initial("Idle")
+    machine.state("Idle")
+    machine.state(
+        "Waiting", entry="raise start after 500 ms\nraise never after 100 ms as n\ncancel n"
+    )
+    machine.state("Work", do="Coverage")
+    machine.state("Wrong")
+    machine.transition("Idle", "Waiting", "launch")
+    machine.transition("Waiting", "Work", "start")
+    machine.transition("Waiting", "Wrong", "never")
+    kit.member("UAV", machine=machine, parts={"cam": "Camera"})
+    kit.swarm("Swarm", {"UAV": 1})
+    model = tmp_path / "delayed.xmi"
+    model.write_text(kit.xmi(), encoding="utf-8")
+    chosen = sc.parse(
+        {
+            "name": "test",
+            "world": {"width": 11, "height": 11},
+            "station": [{"tick": 0, "event": "launch"}],
+            "clock_origin": "launch",
+            "max_ticks": 20_000,
+            "reps": 1,
+        }
+    )
+    (run,) = simulate(compile_machines(model), chosen).runs
+    assert run.reason == "coverage" and run.coverage_final == 1.0
