@@ -26,6 +26,7 @@ def test_the_action_language_reads_and_prints_delays() -> None:
     assert isinstance(delayed, expr.Raise) and delayed.delay is not None
     assert (delayed.delay.unit, delayed.sendid) == ("s", "t")
     assert cancel == expr.Cancel(sendid="t")
+    assert expr.parse_actions("cancel (a + b)")[0] == expr.Cancel(expr=expr.parse_expr("a + b"))
     assert isinstance(computed, expr.Raise) and computed.delay is not None
     assert expr.free_names(computed.delay.amount) == {"n"}
     assert isinstance(text, expr.Raise) and text.delay is not None and text.delay.unit == ""
@@ -38,7 +39,8 @@ def test_the_action_language_reads_and_prints_delays() -> None:
 
 
 def _model(tmp_path: Path) -> Path:
-    """Armed: `tick` after 80 ms as `tk` (cancelled by `stop`), `late` after 200 ms as `lt`
+    """Armed: `tick` after 80 ms as `tk` (cancelled by `stop`: `cancel (which)`, the send id
+    computed, W3C's sendidexpr), `late` after 200 ms as `lt`
     (cancelled when `tick` comes); Ticked re-arms `ping` every 100 ms, counted. Every step
     is 50 ms or more from the due times around it."""
     kit = ModelKit("Delays")
@@ -54,13 +56,17 @@ def _model(tmp_path: Path) -> Path:
     machine.state("Ticked", entry="raise ping(n = count) after delay ms as p")
     machine.state("Late")
     machine.transition("Idle", "Armed", "go")
-    machine.transition("Armed", "Idle", "stop", effect="cancel tk")
+    machine.transition("Armed", "Idle", "stop", effect="cancel (which)")  # which: "tk"
     machine.transition("Armed", "Ticked", "tick", effect="cancel lt")
     machine.transition("Armed", "Late", "late")
     machine.transition("Idle", "Late", "late")
     machine.transition("Ticked", "Ticked", "ping", effect="count = event.n + 1")
     machine.transition("Ticked", "Idle", "stop", effect="cancel p")
-    kit.member("Bot", machine, data={"count": ("Integer", None), "delay": ("Integer", 100)})
+    kit.member(
+        "Bot",
+        machine,
+        data={"count": ("Integer", None), "delay": ("Integer", 100), "which": ("String", "tk")},
+    )
     kit.swarm("Swarm", {"Bot": 1})
     path = tmp_path / "delays.xmi"
     path.write_text(kit.xmi(), encoding="utf-8")

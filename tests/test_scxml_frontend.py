@@ -131,9 +131,9 @@ BAD = {
         "SG060",
         2,
     ),
-    "cancel-sendidexpr": (
-        _doc('<state id="A"><onentry><cancel sendidexpr="x"/></onentry></state>'),
-        "SG060",
+    "cancel-sendidexpr-call": (
+        _doc('<state id="A"><onentry><cancel sendidexpr="f(1)"/></onentry></state>'),
+        "SG062",
         2,
     ),
     "call-in-cond": (

@@ -226,6 +226,8 @@ class ChartRenderer:
             if isinstance(action, c.Raise) and action.delay is not None:
                 return [self._delayed(action, action.delay, data)]
             return [f"ctx.{method}({action.event!r}, {data})"]
+        if isinstance(action, c.Cancel) and action.expr is not None:
+            return [f"ctx.cancel({_unwrap(self.py(action.expr))})"]
         if isinstance(action, c.Cancel):
             return [f"ctx.cancel({action.sendid!r})"]
         if isinstance(action, c.Block):  # its own function: an error in it ends only it

@@ -59,9 +59,10 @@ class Raise:
 
 @dataclass(frozen=True, slots=True)
 class Cancel:
-    """Drop the pending delayed raises of a send id."""
+    """Drop the pending delayed raises of a send id (or of the one `expr` computes)."""
 
-    sendid: str
+    sendid: str | None
+    expr: expr.Expr | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -248,7 +248,7 @@ class Transitions(Context):
                 lowered.append(c.Assign(self._data_ident(action.target), action.value))
                 continue
             if isinstance(action, expr.Cancel):
-                lowered.append(c.Cancel(action.sendid))
+                lowered.append(c.Cancel(action.sendid, action.expr))
                 continue
             if isinstance(action, expr.Done):  # a final state's done data: `donedata`
                 continue

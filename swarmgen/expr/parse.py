@@ -541,6 +541,11 @@ class _Parser:
     def cancel(self) -> Cancel:
         self.advance()
         name = self.peek()
+        if self.is_op("(", name):  # `cancel (expr)`: the send id computed
+            opening = self.advance()
+            computed, _ = self.expr(0)
+            self.close(opening)
+            return Cancel(expr=computed)
         if name.kind != "word" or name.text in RESERVED:
             self.fail(
                 name,

@@ -260,10 +260,12 @@ class Log(_Model):
 
 
 class Cancel(_Model):
-    """``cancel <name>``: drop the delayed events raised `as <name>` that are still pending."""
+    """``cancel <name>``: drop the delayed events raised `as <name>` that are still pending;
+    ``cancel (expr)``: those of the send id the expression gives (W3C's `sendidexpr`)."""
 
     kind: Literal["cancel"] = "cancel"
-    sendid: Ident
+    sendid: Ident | None = None
+    expr: Operand | None = None
 
 
 class Branch(_Model):
@@ -408,7 +410,10 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     """The action with `rewrite` applied to each expression it holds (itself when none
     changes)."""
     if isinstance(action, Cancel):
-        return action
+        if action.expr is None:
+            return action
+        computed = rewrite(action.expr)
+        return action if computed is action.expr else Cancel(expr=computed)
     if isinstance(action, Log):
         value = rewrite(action.value)
         return action if value is action.value else Log(label=action.label, value=value)
@@ -463,7 +468,9 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
 def action_exprs(action: Action) -> tuple[Expr, ...]:
     """The expressions an action evaluates itself (an `if`: its conditions, not its
     branches' actions: `flat` gives those), in evaluation order."""
-    if isinstance(action, Cancel | Block):
+    if isinstance(action, Cancel):
+        return (action.expr,) if action.expr is not None else ()
+    if isinstance(action, Block):
         return ()
     if isinstance(action, If):
         return tuple(b.cond for b in action.branches if b.cond is not None)

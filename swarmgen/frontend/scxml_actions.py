@@ -345,7 +345,10 @@ class Actions:
 
     def cancel(self, node: etree._Element) -> list[str]:
         """`<cancel sendid>`: `cancel id` (the timer pattern's is read with its state)."""
-        sendid = node.get("sendid")
+        sendid, computed = node.get("sendid"), node.get("sendidexpr")
+        if computed is not None and sendid is None:
+            text = self.text(computed, node)
+            return [f"cancel ({text})"] if text is not None else []
         if sendid is None or not sendid.isidentifier() or sendid.startswith("__"):
             self.b.report(
                 dg.SCXML_UNSUPPORTED,

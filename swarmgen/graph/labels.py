@@ -34,6 +34,8 @@ def action_text(action: expr.Action) -> str:
             verb = "raise" if isinstance(action, expr.Raise) else "send"
             args = f"({_args_text(action.args)})" if action.args else ""
             return f"{verb} {action.event}{args}{_delay_text(action)}"
+        case expr.Cancel() if action.expr is not None:
+            return f"cancel ({expr.to_text(action.expr)})"
         case expr.Cancel():
             return f"cancel {action.sendid}"
         case expr.If():

@@ -390,8 +390,10 @@ class _Writer:
             elif isinstance(action, c.Send):
                 send = _sub(parent, _sg("send"), {"event": action.event, "scope": "swarm"})
                 self.params(send, action.params, _sg("param"))
+            elif isinstance(action, c.Cancel) and action.expr is not None:
+                _sub(parent, "cancel", {"sendidexpr": self.js(action.expr)})
             elif isinstance(action, c.Cancel):
-                _sub(parent, "cancel", {"sendid": action.sendid})
+                _sub(parent, "cancel", {"sendid": str(action.sendid)})
             elif isinstance(action, c.Block):  # only at the top of entry/exit (the check)
                 self.actions(parent, action.actions)
             elif isinstance(action, c.Log):

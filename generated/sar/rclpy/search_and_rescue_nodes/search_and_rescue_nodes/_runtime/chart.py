@@ -389,8 +389,11 @@ class Context:
         """`raise e to target [after ...]`: W3C's `<send target>` (Engine.raise_targeted)."""
         self._engine.raise_targeted(name, data, target, delay_ms, sendid)
 
-    def cancel(self, sendid: str) -> None:
-        """`cancel id`: the pending delayed events raised as `id` never arrive."""
+    def cancel(self, sendid: Any) -> None:
+        """`cancel id` / `cancel (expr)`: the pending delayed events raised as that send id
+        never arrive; a computed id that is no string is an error (error.execution)."""
+        if not isinstance(sendid, str):
+            raise TypeError(f"a send id is a string, not {sendid!r}")
         self._engine.cancel_delayed(sendid)
 
     @staticmethod
