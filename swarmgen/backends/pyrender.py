@@ -15,7 +15,7 @@ from swarmgen import expr
 from swarmgen.backends import pyformat, pyknown, pylayout
 from swarmgen.chart import model as c
 from swarmgen.names import identifier
-from swarmgen.runtime.chart import zero_like
+from swarmgen.runtime.values import zero_like
 
 LINE_LENGTH = pyformat.LINE_LENGTH
 

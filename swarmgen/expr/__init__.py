@@ -17,8 +17,9 @@ Modules of the package import one another directly, never through this file.
 """
 
 from swarmgen.expr.errors import ExprError
-from swarmgen.expr.parse import parse_actions, parse_bindings, parse_expr
+from swarmgen.expr.parse import parse_bindings, parse_expr
 from swarmgen.expr.render import js_string, to_ecmascript, to_python, to_text
+from swarmgen.expr.statements import parse_actions
 from swarmgen.expr.tree import (
     EVENT_META,
     MAX_DEPTH,

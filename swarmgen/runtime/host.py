@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from swarmgen.runtime.chart import Call, Node, Record
+from swarmgen.runtime.chart import Call, Node
+from swarmgen.runtime.values import Record
 
 __all__ = ["Event", "Host", "NullHost"]
 

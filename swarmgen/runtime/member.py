@@ -16,8 +16,9 @@ from collections.abc import Awaitable, Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from swarmgen.runtime.chart import Call, Chart, Node, record
+from swarmgen.runtime.chart import Call, Chart, Node
 from swarmgen.runtime.engine import FINALIZE_PREFIX, Engine, Event
+from swarmgen.runtime.values import record
 
 CANCEL_GRACE = 1.0  # seconds a cancelled behaviour may take to end before it is abandoned
 DRAIN_BATCH = 256  # events processed between two yields to the event loop

@@ -28,8 +28,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, cast
 
-from swarmgen.runtime.chart import record
 from swarmgen.runtime.host import Event
+from swarmgen.runtime.values import record
 
 if TYPE_CHECKING:
     from swarmgen.runtime.member import Member

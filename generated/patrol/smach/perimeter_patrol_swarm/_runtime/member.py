@@ -17,8 +17,9 @@ from collections.abc import Awaitable, Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from .chart import Call, Chart, Node, record
+from .chart import Call, Chart, Node
 from .engine import FINALIZE_PREFIX, Engine, Event
+from .values import record
 
 CANCEL_GRACE = 1.0  # seconds a cancelled behaviour may take to end before it is abandoned
 DRAIN_BATCH = 256  # events processed between two yields to the event loop

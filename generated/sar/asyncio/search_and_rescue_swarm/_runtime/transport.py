@@ -29,8 +29,8 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, cast
 
-from .chart import record
 from .host import Event
+from .values import record
 
 if TYPE_CHECKING:
     from .member import Member

@@ -6,7 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from .chart import Call, Node, Record
+from .chart import Call, Node
+from .values import Record
 
 __all__ = ["Event", "Host", "NullHost"]
 
