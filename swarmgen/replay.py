@@ -45,6 +45,7 @@ class ReplayError(SwarmgenError):
 
 SCRIPT_BYTES = 8 << 20  # a replay script (docs/trace.md, "Limits"; a step is about 100 bytes)
 MAX_STEPS = 100_000  # steps of a script, and inputs of one burst
+MAX_WAIT = 60_000  # ms one `wait` step lets pass (in real time: timers and delayed raises)
 _TOP_KEYS = {"member", "steps", "description"}
 _EVENT_KEYS = {"event": str, "data": dict}
 _COMPLETE_KEYS = {"complete": str, "outcome": str, "outputs": dict, "state": str}
@@ -95,12 +96,18 @@ def _check_step(step: object, where: str, *, burst_allowed: bool) -> None:
         for number, each in enumerate(inner):
             _check_step(each, f"{where}.burst[{number}]", burst_allowed=False)
         return
+    if "wait" in item:
+        jsonfile.check_keys(item, {"wait"}, where)
+        wait = item["wait"]
+        if isinstance(wait, bool) or not isinstance(wait, int | float) or not 0 <= wait <= MAX_WAIT:
+            raise jsonfile.JsonError(f"{where}.wait: milliseconds, from 0 to {MAX_WAIT:,}")
+        return
     if "event" in item:
         keys = _EVENT_KEYS
     elif "complete" in item:
         keys = _COMPLETE_KEYS
     else:
-        raise jsonfile.JsonError(f"{where}: a step needs `event`, `complete` or `burst`")
+        raise jsonfile.JsonError(f"{where}: a step needs `event`, `complete`, `wait` or `burst`")
     jsonfile.check_keys(item, set(keys), where)
     for key, kind in keys.items():
         value, at = item.get(key), jsonfile.key_path(where, key)

@@ -81,8 +81,9 @@ class Machine:
             )
         )
 
-    def final(self, name: str, region: str = "") -> str:
-        return self._add(_State(name, region, kind="FinalState"))
+    def final(self, name: str, region: str = "", *, entry: str = "", exit: str = "") -> str:
+        """A final state; entry and exit actions (with `done(...)`) are swarmgen's extension."""
+        return self._add(_State(name, region, kind="FinalState", entry=entry, exit=exit))
 
     def pseudo(self, name: str, kind: str, region: str = "") -> str:
         return self._add(_State(name, region, kind="Pseudostate", pseudo=kind))
@@ -413,10 +414,20 @@ def _vertex(ids: _Ids, machine: Machine, state: _State, indent: str) -> list[str
         return [
             f'{indent}<subvertex xmi:type="uml:Pseudostate" xmi:id="{vid}" name={quoteattr(state.name)}{kind}/>'
         ]
-    if state.kind == "FinalState":
+    if state.kind == "FinalState" and not (state.entry or state.exit):
         return [
             f'{indent}<subvertex xmi:type="uml:FinalState" xmi:id="{vid}" name={quoteattr(state.name)}/>'
         ]
+    if state.kind == "FinalState":
+        lines = [
+            f'{indent}<subvertex xmi:type="uml:FinalState" xmi:id="{vid}" name={quoteattr(state.name)}>'
+        ]
+        for feature, text in (("entry", state.entry), ("exit", state.exit)):
+            if text:
+                lines.append(
+                    f'{indent}  <{feature} xmi:type="uml:OpaqueBehavior" xmi:id="{ids.new()}"><body>{escape(text)}</body></{feature}>'
+                )
+        return [*lines, f"{indent}</subvertex>"]
     sub = f' submachine="{ids["sm:" + state.submachine]}"' if state.submachine else ""
     lines = [
         f'{indent}<subvertex xmi:type="uml:State" xmi:id="{vid}" name={quoteattr(state.name)}{sub}>'
@@ -453,8 +464,10 @@ def _transition(ids: _Ids, machine: Machine, transition: _Transition, indent: st
             f'{indent}  <effect xmi:type="uml:OpaqueBehavior" xmi:id="{ids.new()}"><body>{escape(transition.effect)}</body></effect>'
         )
     for trigger in transition.triggers:
+        # the platform's error events are triggers by name, without an event (docs/semantics.md)
+        event = "" if trigger.startswith("error") else f' event="{ids["event:" + trigger]}"'
         lines.append(
-            f'{indent}  <trigger xmi:id="{ids.new()}" name={quoteattr(trigger)} event="{ids["event:" + trigger]}"/>'
+            f"{indent}  <trigger xmi:id={quoteattr(ids.new())} name={quoteattr(trigger)}{event}/>"
         )
     lines.append(f"{indent}</transition>")
     return lines

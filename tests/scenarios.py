@@ -244,10 +244,18 @@ def _walk(e: x.Expr) -> Iterator[x.Expr]:
 
 
 def _action_exprs(actions: Sequence[c.Action]) -> Iterator[x.Expr]:
-    for action in actions:
+    """The expressions of actions: values, event fields, delays, and `if` conditions with the
+    actions of their branches (their comparisons and divisors are as interesting as guards')."""
+    for action in c.flat(tuple(actions)):
         if isinstance(action, c.Assign):
             yield action.value
+        elif isinstance(action, c.If):
+            yield from (cond for cond, _ in action.branches if cond is not None)
+        elif isinstance(action, c.ForEach):
+            yield action.array
         elif isinstance(action, c.Raise | c.Send):
+            if isinstance(action, c.Raise) and action.delay is not None:
+                yield action.delay.amount
             for param in action.params:
                 if _is_expr(param.value):
                     yield param.value  # type: ignore[misc]

@@ -32,6 +32,9 @@ WALK_LENGTH = 40
 FIREWATCH = ROOT / "tests" / "fixtures" / "models" / "firewatch.xmi"
 # enumerations driving guards, a sequence through behaviours and an event, nested data types
 DISPATCH = ROOT / "tests" / "fixtures" / "models" / "dispatch.xmi"
+# if/elif/else over outputs, unset data and event fields; failing conditions and effects;
+# transitions on error.execution (docs/semantics.md)
+TRIAGE = ROOT / "tests" / "fixtures" / "models" / "triage.xmi"
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 _ALL_MODELS = [
     *SAMPLE_MODELS,
@@ -41,6 +44,7 @@ _ALL_MODELS = [
     XMI_SAMPLES / "papyrus_spring-sm_simple-connectionpointref.uml",
     FIREWATCH,
     DISPATCH,
+    TRIAGE,
 ]
 # The reference files live in ../shared, which a user's clone does not have.
 MODELS = [m for m in _ALL_MODELS if m.exists()]

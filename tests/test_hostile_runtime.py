@@ -506,6 +506,9 @@ def _echo_model() -> str:
     return kit.xmi()
 
 
+ENDS_AFTER_1S = ("--duration", "1", "--grace", "2")
+
+
 def test_a_swarm_that_never_stops_talking_still_ends_at_its_duration(tmp_path: Path) -> None:
     (tmp_path / "echo.xmi").write_text(_echo_model(), encoding="utf-8")
     compiled = swarmgen("compile", "echo.xmi", "-o", "out", "--backend", "asyncio", cwd=tmp_path)
@@ -515,9 +518,8 @@ def test_a_swarm_that_never_stops_talking_still_ends_at_its_duration(tmp_path: P
     started = time.perf_counter()
     done = subprocess.run(
         # a grace of 2 s: on a loaded machine (the suite runs on two workers) shutting the flood
-        # down can take longer than the default half second, which is not what this test is about
-        [sys.executable, "-m", "echo_swarm", "--swarm", "--events", "go@0", "--duration", "1"]
-        + ["--grace", "2"],
+        # down can take longer than the default second, which is not what this test is about
+        [sys.executable, "-m", "echo_swarm", "--swarm", "--events", "go@0", *ENDS_AFTER_1S],
         cwd=parent,
         env=environment,
         stdout=subprocess.DEVNULL,  # millions of trace lines: only the ending matters here

@@ -118,12 +118,22 @@ BAD = {
         "SG061",
         2,
     ),
-    "if": (_doc('<state id="A"><onentry><if cond="true"/></onentry></state>'), "SG060", 2),
+    "else-outside-if": (_doc('<state id="A"><onentry><else/></onentry></state>'), "SG060", 2),
     "invoke": (_doc('<state id="A"><invoke type="http"/></state>'), "SG060", 2),
     "script": (_doc('<script>x = 1;</script>\n<state id="A"/>'), "SG060", 2),
-    "send-delay": (
-        _doc('<state id="A"><onentry><send event="e" delay="1s"/></onentry></state>'),
+    "send-other-processor": (
+        _doc('<state id="A"><onentry><send event="e" type="http://a/b"/></onentry></state>'),
         "SG060",
+        2,
+    ),
+    "send-bad-delay": (
+        _doc('<state id="A"><onentry><send event="e" delay="soon"/></onentry></state>'),
+        "SG060",
+        2,
+    ),
+    "cancel-sendidexpr-call": (
+        _doc('<state id="A"><onentry><cancel sendidexpr="f(1)"/></onentry></state>'),
+        "SG062",
         2,
     ),
     "call-in-cond": (
@@ -131,9 +141,9 @@ BAD = {
         "SG062",
         2,
     ),
-    "in-outside-join": (
-        _doc('<state id="A"><transition event="e" cond="In(\'A\')" target="A"/></state>'),
-        "SG060",
+    "in-without-quotes": (
+        _doc('<state id="A"><transition event="e" cond="In(A)" target="A"/></state>'),
+        "SG062",
         2,
     ),
     "xpath": (_doc('<state id="A"/>', "xpath"), "SG063", 1),

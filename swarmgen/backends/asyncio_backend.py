@@ -15,6 +15,7 @@ from swarmgen.chart.model import Chart
 from swarmgen.render import render
 
 RUNTIME_MODULES = (
+    "values",
     "chart",
     "host",
     "microstep",

@@ -15,7 +15,7 @@ from swarmgen import expr
 from swarmgen.backends import pyformat, pyknown, pylayout
 from swarmgen.chart import model as c
 from swarmgen.names import identifier
-from swarmgen.runtime.chart import zero_like
+from swarmgen.runtime.values import zero_like
 
 LINE_LENGTH = pyformat.LINE_LENGTH
 
@@ -49,7 +49,13 @@ def format_python(source: str) -> str:
 
 
 # What each kind of helper function returns: guards, actions, call arguments and goal callbacks.
-RETURNS = {"cond": "bool", "action": "None", "args": "dict[str, Any]", "goal": "dict[str, Any]"}
+RETURNS = {
+    "cond": "bool",
+    "action": "None",
+    "args": "dict[str, Any]",
+    "goal": "dict[str, Any]",
+    "donedata": "Any",
+}
 
 
 @dataclass(frozen=True)
@@ -211,12 +217,71 @@ class ChartRenderer:
         if isinstance(action, c.Raise | c.Send):
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
-            return [f"ctx.{method}({action.event!r}, {data if action.params else 'None'})"]
+            data = data if action.params else "None"
+            if isinstance(action, c.Raise) and action.target is not None:
+                target = _unwrap(self.py(action.target))
+                ms = self._delay_ms(action.delay) if action.delay is not None else "0"
+                call = f"ctx.raise_to({action.event!r}, {data}, {target}, {ms}, {action.sendid!r})"
+                return [call]
+            if isinstance(action, c.Raise) and action.delay is not None:
+                return [self._delayed(action, action.delay, data)]
+            return [f"ctx.{method}({action.event!r}, {data})"]
+        if isinstance(action, c.Cancel) and action.expr is not None:
+            return [f"ctx.cancel({_unwrap(self.py(action.expr))})"]
+        if isinstance(action, c.Cancel):
+            return [f"ctx.cancel({action.sendid!r})"]
+        if isinstance(action, c.Block):  # its own function: an error in it ends only it
+            reads = self._reads_data
+            inner = [line for each in action.actions for line in self._action_lines(each)]
+            name = self._function("action", inner or ["pass"])
+            self._reads_data = reads
+            return [f"ctx.block({name})"]
+        if isinstance(action, c.Log):
+            return [f"ctx.log({action.label!r}, {_unwrap(self.py(action.value))})"]
+        if isinstance(action, c.If):
+            return self._if_lines(action)
+        if isinstance(action, c.ForEach):
+            self._reads_data = True
+            index = f"d[{action.index!r}]" if action.index is not None else "_"
+            head = f"for d[{action.item!r}], {index} in ctx.each({_unwrap(self.py(action.array))}):"
+            inner = [line for each in action.actions for line in self._action_lines(each)]
+            return [head, *("    " + line for line in inner or ["pass"])]
         return [f"ctx.opaque({action.language!r}, {action.text!r})"]
 
+    def _if_lines(self, action: c.If) -> list[str]:
+        """`if`/`elif`/`else`: each condition through `ctx.holds`, which makes one that fails
+        false and raises error.execution, and the block goes on (W3C `<if>`)."""
+        lines: list[str] = []
+        for number, (cond, actions) in enumerate(action.branches):
+            if cond is None:
+                lines.append("else:")
+            else:
+                keyword = "if" if number == 0 else "elif"
+                lines.append(f"{keyword} ctx.holds(lambda: {_unwrap(self.py(cond))}):")
+            inner = [line for each in actions for line in self._action_lines(each)]
+            lines += ["    " + line for line in inner or ["pass"]]
+        return lines
+
+    def _delayed(self, action: c.Raise, delay: c.Delay, data: str) -> str:
+        """`raise e after ...` with its delay in milliseconds."""
+        ms = self._delay_ms(delay)
+        return f"ctx.raise_later({action.event!r}, {data}, {ms}, {action.sendid!r})"
+
+    def _delay_ms(self, delay: c.Delay) -> str:
+        """A delay as Python computing milliseconds."""
+        amount = _unwrap(self.py(delay.amount))
+        if delay.unit == "s" and isinstance(delay.amount, expr.Const):
+            return f"{amount} * 1000"
+        return {"ms": amount, "s": f"({amount}) * 1000", "": f"ctx.duration({amount})"}[delay.unit]
+
     def _hooks(self, node: c.Node) -> list[str]:
-        """The `onentry=` and `onexit=` options of a state (its action functions, if any)."""
+        """The `onentry=` and `onexit=` options of a state (its action functions, if any), and
+        a final state's `donedata=` (the fields of its done.state event)."""
         hooks = [("onentry", self._action(node.onentry)), ("onexit", self._action(node.onexit))]
+        if node.donedata or node.donecontent is not None:
+            items = ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in node.donedata)
+            value = self.py(node.donecontent) if node.donecontent is not None else f"{{{items}}}"
+            hooks.append(("donedata", self._function("donedata", [f"return {_unwrap(value)}"])))
         return [f"{key}={function}" for key, function in hooks if function]
 
     def _transition_options(self, transition: c.Transition, guard: str) -> list[str]:

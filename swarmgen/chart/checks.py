@@ -137,10 +137,17 @@ def _names(e: expr.Expr, ids: dict[str, str]) -> set[str]:
 
 def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str]:
     read: set[str] = set()
-    for action in actions:
+    for action in c.flat(actions):
         if isinstance(action, c.Assign):
             read |= _names(action.value, ids)
+        elif isinstance(action, c.If):
+            for cond, _ in action.branches:
+                read |= _names(cond, ids) if cond is not None else set()
+        elif isinstance(action, c.ForEach):
+            read |= _names(action.array, ids)
         elif isinstance(action, c.Raise | c.Send):
+            if isinstance(action, c.Raise) and action.delay is not None:
+                read |= _names(action.delay.amount, ids)
             for param in action.params:
                 if not isinstance(param.value, c.FieldDefault):
                     read |= _names(param.value, ids)
@@ -148,7 +155,11 @@ def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str
 
 
 def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
-    return {a.location for a in actions if isinstance(a, c.Assign)}
+    found = {a.location for a in c.flat(actions) if isinstance(a, c.Assign)}
+    for loop in c.flat(actions):
+        if isinstance(loop, c.ForEach):
+            found |= {loop.item, *([loop.index] if loop.index else [])}
+    return found
 
 
 def _outputs_written(owner: c.Node, transition: c.Transition) -> set[str]:

@@ -19,7 +19,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import replace
 
-from swarmgen.chart.model import Action, Chart, Node, Raise, Transition
+from swarmgen.chart.model import Action, Chart, Node, Raise, Transition, flat
 
 ERROR_EVENT = "error.execution"  # any expression may fail: always counted as raised
 # Past this many spontaneous transitions the pairwise graph would be slow on a hostile chart:
@@ -52,7 +52,11 @@ def raised(actions: Iterable[Action]) -> set[str]:
     """Events these actions put on the member's own queues: `raise e` on the internal queue,
     `raise e(f = ...)` at the back of its external queue (the step bound counts through those
     too: docs/semantics.md)."""
-    return {a.event for a in actions if isinstance(a, Raise)}
+    return {
+        a.event
+        for a in flat(tuple(actions))
+        if isinstance(a, Raise) and a.delay is None and a.target is None
+    }
 
 
 def dot_prefixes(names: Iterable[str]) -> set[str]:

@@ -16,10 +16,12 @@ Lowering decides everything the outputs share (documented in docs/scxml.md):
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TypeGuard
 
 from swarmgen import expr
 from swarmgen.chart import model as c
 from swarmgen.chart.cycles import bound_cycles
+from swarmgen.chart.instates import resolve_in_states
 from swarmgen.chart.lowering import Copy, Instance
 from swarmgen.chart.transitions import Transitions
 from swarmgen.ir.nodes import (
@@ -53,7 +55,8 @@ def lower(model: Model) -> tuple[c.Chart, ...]:
 
     The pipeline lowers a model once, after the model-level checks passed (`check.may_lower`),
     and hands the charts to the chart-level checks and every output."""
-    return tuple(bound_cycles(chart) for chart in _lower(model))  # the step bound's marks
+    # `In(name)` to chart ids, then the step bound's marks
+    return tuple(bound_cycles(resolve_in_states(chart)) for chart in _lower(model))
 
 
 def _lower(model: Model) -> tuple[c.Chart, ...]:
@@ -226,7 +229,15 @@ class _Lowering(Transitions):
 
     def _vertex(self, copy: Copy, vertex: Vertex) -> c.Node | None:
         if isinstance(vertex, FinalState):
-            return c.Node(self._id(copy.instance, vertex.id), "final", name=vertex.name or None)
+            return c.Node(
+                self._id(copy.instance, vertex.id),
+                "final",
+                name=vertex.name or None,
+                onentry=self._actions(vertex.entry, ()),
+                onexit=self._actions(vertex.exit, ()),
+                donedata=tuple(c.Param(identifier(a.name), a.value) for a in vertex.donedata),
+                donecontent=vertex.done_content,
+            )
         if isinstance(vertex, State):
             return self._state(copy, vertex)
         if vertex.kind in _HISTORY:
@@ -341,9 +352,14 @@ class _Lowering(Transitions):
         for machine in self.index.reachable_machines(self.root):
             for transition in machine.transitions:
                 names.update(t.name for t in transition.triggers if t.kind == TriggerKind.EVENT)
-                names.update(a.event for a in transition.effect if not isinstance(a, expr.Assign))
+                names.update(a.event for a in expr.flat(transition.effect) if _names_event(a))
             for placed in walk(machine):
                 if isinstance(placed.vertex, State):
                     actions = (*placed.vertex.entry, *placed.vertex.exit)
-                    names.update(a.event for a in actions if not isinstance(a, expr.Assign))
+                    names.update(a.event for a in expr.flat(actions) if _names_event(a))
         return [e for e in self.index.model.events if e.name in names]
+
+
+def _names_event(action: expr.Action) -> TypeGuard[expr.Raise | expr.Send]:
+    """Whether the action raises or sends an event (an assignment or `cancel` names none)."""
+    return isinstance(action, expr.Raise | expr.Send)

@@ -38,11 +38,31 @@ class Param:
 
 
 @dataclass(frozen=True, slots=True)
+class Delay:
+    """When a delayed raise arrives: `amount` in `unit` (ms, s; "": a duration string)."""
+
+    amount: expr.Expr
+    unit: str
+
+
+@dataclass(frozen=True, slots=True)
 class Raise:
-    """An event for this member only (internal queue)."""
+    """An event for this member only: the internal queue; with a delay, its external queue
+    once the delay is over (unless cancelled by its send id first)."""
 
     event: str
     params: tuple[Param, ...] = ()
+    delay: Delay | None = None
+    sendid: str | None = None
+    target: expr.Expr | None = None  # W3C's <send target> (docs/semantics.md, "Targets")
+
+
+@dataclass(frozen=True, slots=True)
+class Cancel:
+    """Drop the pending delayed raises of a send id (or of the one `expr` computes)."""
+
+    sendid: str | None
+    expr: expr.Expr | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,7 +81,52 @@ class Opaque:
     text: str
 
 
-Action = Assign | Raise | Send | Opaque
+@dataclass(frozen=True, slots=True)
+class If:
+    """`if`/`elif`/`else`: (condition or None for `else`, actions) per branch, in order."""
+
+    branches: tuple[tuple[expr.Expr | None, tuple[Action, ...]], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class ForEach:
+    """`for item, index in array do ... end`: data ids written per item, then the actions."""
+
+    array: expr.Expr
+    item: str  # data id
+    index: str | None  # data id
+    actions: tuple[Action, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Log:
+    """`log label, value`: to the member's log (no state or trace change)."""
+
+    label: str
+    value: expr.Expr
+
+
+@dataclass(frozen=True, slots=True)
+class Block:
+    """`block ... end`: its own error scope (SCXML: an `<onentry>`/`<onexit>` of its own)."""
+
+    actions: tuple[Action, ...]
+
+
+Action = Assign | Raise | Send | Cancel | If | ForEach | Log | Block | Opaque
+
+
+def flat(actions: tuple[Action, ...]) -> list[Action]:
+    """The actions and, for an `if`, every branch's actions (pre-order)."""
+    found: list[Action] = []
+    for action in actions:
+        found.append(action)
+        if isinstance(action, If):
+            for _, inner in action.branches:
+                found += flat(inner)
+        if isinstance(action, ForEach | Block):
+            found += flat(action.actions)
+    return found
 
 
 @dataclass(frozen=True, slots=True)
@@ -136,6 +201,8 @@ class Node:
     region: str | None = None  # the model's region name (a region of a parallel state)
     submachine: str | None = None  # name of the inlined machine
     pseudostate: str | None = None  # choice, junction, fork, entryPoint, ... (transient states)
+    donedata: tuple[Param, ...] = ()  # a final state's: the fields of its done.state event
+    donecontent: expr.Expr | None = None  # or the event's whole data
 
 
 @dataclass(frozen=True, slots=True)

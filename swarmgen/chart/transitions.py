@@ -103,6 +103,8 @@ class Transitions(Context):
             return self._timer_event(sid, transition, trigger, copy)
         if trigger.kind == TriggerKind.ANY:
             return "*"
+        if trigger.kind in (TriggerKind.ERROR, TriggerKind.DONE):
+            return trigger.name  # done.state.<name>: the state's id by `chart.instates`
         event = self.index.events.get(trigger.event or "")
         return event.ident if event is not None else identifier(trigger.name)
 
@@ -245,13 +247,46 @@ class Transitions(Context):
             if isinstance(action, expr.Assign):
                 lowered.append(c.Assign(self._data_ident(action.target), action.value))
                 continue
+            if isinstance(action, expr.Cancel):
+                lowered.append(c.Cancel(action.sendid, action.expr))
+                continue
+            if isinstance(action, expr.Done):  # a final state's done data: `donedata`
+                continue
+            if isinstance(action, expr.Log):
+                lowered.append(c.Log(action.label, action.value))
+                continue
+            if isinstance(action, expr.Block):
+                lowered.append(c.Block(self._actions(action.actions, ())))
+                continue
+            if isinstance(action, expr.If):
+                lowered.append(self._if(action))
+                continue
+            if isinstance(action, expr.ForEach):
+                index = self._data_ident(action.index) if action.index is not None else None
+                inner = self._actions(action.actions, ())
+                item = self._data_ident(action.item)
+                lowered.append(c.ForEach(action.array, item, index, inner))
+                continue
             params = self._params(action.event, action.args)
             if isinstance(action, expr.Raise):
-                lowered.append(c.Raise(self._event_ident(action.event), params))
+                delay = action.delay
+                lowered.append(
+                    c.Raise(
+                        self._event_ident(action.event),
+                        params,
+                        c.Delay(delay.amount, delay.unit) if delay is not None else None,
+                        action.sendid,
+                        action.target,
+                    )
+                )
             else:
                 lowered.append(c.Send(self._event_ident(action.event), params))
         lowered += [c.Opaque(code.language or "unspecified", code.body) for code in opaque]
         return tuple(lowered)
+
+    def _if(self, action: expr.If) -> c.If:
+        """An `if` with each branch's actions lowered (outputs were read in `_actions`)."""
+        return c.If(tuple((b.cond, self._actions(b.actions, ())) for b in action.branches))
 
     def _params(self, event_name: str, args: tuple[expr.Arg, ...]) -> tuple[c.Param, ...]:
         """The effect's fields, then every declared field it leaves out with its default (the
@@ -269,9 +304,4 @@ class Transitions(Context):
 
 
 def _read_outputs(action: expr.Action, outputs: dict[str, str]) -> expr.Action:
-    if isinstance(action, expr.Assign):
-        return action.model_copy(update={"value": expr.replace_fields(action.value, outputs)})
-    args = tuple(
-        a.model_copy(update={"value": expr.replace_fields(a.value, outputs)}) for a in action.args
-    )
-    return action.model_copy(update={"args": args})
+    return expr.map_action(action, lambda e: expr.replace_fields(e, outputs))

@@ -14,7 +14,7 @@ from typing import Any
 
 from swarmgen.ir.nodes import DataType, Enumeration, Property, Value
 from swarmgen.ir.primitives import Primitive, primitive
-from swarmgen.runtime.chart import zero_like
+from swarmgen.runtime.values import zero_like
 
 MAX_NESTING = 32  # a data type that contains itself (directly or not) stops here
 NO_ENUMS: Mapping[str, Enumeration] = MappingProxyType({})

@@ -7,8 +7,9 @@ from collections.abc import Iterable
 from swarmgen import diagnostics as dg
 from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
+from swarmgen.ir.nodes import FinalState, Model, Property, State, Transition, TriggerKind
 from swarmgen.ir.query import ModelIndex, walk
+from swarmgen.names import identifier
 from swarmgen.span import Span
 
 _NO_EVENT = frozenset[str]()
@@ -28,10 +29,69 @@ def check_expressions(model: Model) -> list[Diagnostic]:
             found.extend(
                 _actions(index, transition.effect, scope, fields, transition.span, "effect")
             )
+        for placed in walk(machine):
+            final = placed.vertex
+            if isinstance(final, FinalState):
+                for actions, what in ((final.entry, "entry action"), (final.exit, "exit action")):
+                    found.extend(_actions(index, actions, scope, _NO_EVENT, final.span, what))
+                done = [a.value for a in final.donedata] + [final.done_content] * bool(
+                    final.done_content
+                )
+                for value in done:
+                    if value is not None:
+                        found.extend(_names(value, scope, _NO_EVENT, final.span, "done data"))
+        for transition in machine.transitions:
+            found.extend(_misplaced_blocks(transition.effect, transition.span, "effect", top=False))
+        for state in states.values():
+            for actions in (state.entry, state.exit):
+                found.extend(_misplaced_blocks(actions, state.span, "entry or exit action"))
         for state in states.values():
             found.extend(_actions(index, state.entry, scope, _NO_EVENT, state.span, "entry action"))
             found.extend(_actions(index, state.exit, scope, _NO_EVENT, state.span, "exit action"))
             found.extend(_bindings(index, state, scope))
+    return found + _unknown_states(model)
+
+
+def _misplaced_blocks(
+    actions: tuple[expr.Action, ...], span: Span, what: str, top: bool = True
+) -> list[Diagnostic]:
+    """`block ... end` stands only at the top of an entry or exit behaviour (SCXML's separate
+    `<onentry>`/`<onexit>` elements; nothing else can spell it)."""
+    nested = [a for a in actions if not (top and isinstance(a, expr.Block))]
+    inner = [b for a in actions if isinstance(a, expr.Block) for b in a.actions]
+    if any(isinstance(a, expr.Block) for a in expr.flat((*nested, *inner))):
+        return [
+            dg.EFFECT_SYNTAX.at(
+                span,
+                what=what,
+                error="has a block where none may stand",
+                hint="`block ... end` stands only at the top of an entry or exit action",
+            )
+        ]
+    return []
+
+
+def _unknown_states(model: Model) -> list[Diagnostic]:
+    """`In("S")` where no state of the model is named S (nor has S as an SCXML id: a name
+    made an identifier, or a qualified `A__B`; lowering resolves it: `chart.instates`)."""
+    known = {p.vertex.name for m in model.machines for p in walk(m) if p.vertex.name}
+    known |= {identifier(name) for name in known}
+    found: list[Diagnostic] = []
+    for machine in model.machines:
+        places: list[tuple[tuple[expr.Action, ...], expr.Expr | None, Span, str]] = [
+            (t.effect, t.guard, t.span, "transition") for t in machine.transitions
+        ]
+        for placed in walk(machine):
+            if isinstance(placed.vertex, State):
+                vertex = placed.vertex
+                actions = (*vertex.entry, *vertex.exit)
+                places.append((actions, None, vertex.span, "entry or exit action"))
+        for actions, guard, span, what in places:
+            exprs = [guard] if guard is not None else []
+            exprs += [e for a in expr.flat(actions) for e in expr.action_exprs(a)]
+            for name in sorted({s for e in exprs for s in expr.in_states(e)}):
+                if name not in known and "__" not in name:
+                    found.append(dg.UNKNOWN_NAME.at(span, "state", what=what, name=name))
     return found
 
 
@@ -50,14 +110,18 @@ def _event_fields(
             per_trigger.append(
                 frozenset(o.name for o in behaviour.outputs) if behaviour else _NO_EVENT
             )
-        elif trigger.kind in {TriggerKind.CALL, TriggerKind.ANY} or (
+        elif trigger.kind in {TriggerKind.CALL, TriggerKind.ANY, TriggerKind.DONE} or (
             trigger.kind == TriggerKind.EVENT and trigger.event is None
         ):
             return None  # untyped events (plain UML models): their fields are unknown
         else:
             per_trigger.append(_NO_EVENT)
     if not per_trigger:
-        return _NO_EVENT
+        source = states.get(transition.source)
+        completion = source is not None and bool(source.regions) and not transition.eventless
+        # a composite state's completion: done.state.<id>, whose fields its final states' done
+        # data gives (untyped)
+        return None if completion else _NO_EVENT
     return frozenset.intersection(*per_trigger)
 
 
@@ -111,14 +175,34 @@ def _actions(
     what: str,
 ) -> list[Diagnostic]:
     found: list[Diagnostic] = []
-    for action in actions:
+    for action in expr.flat(actions):
         if isinstance(action, expr.Assign):
             if action.target not in scope:
                 found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
-        for arg in action.args:
-            found.extend(_names(arg.value, scope, fields, span, what))
+        if isinstance(action, expr.Done):
+            found.append(
+                dg.EFFECT_SYNTAX.at(
+                    span,
+                    what=what,
+                    error="gives done(...), the done data of a final state",
+                    hint="only a final state's entry action gives done data",
+                )
+            )
+            continue
+        if isinstance(action, expr.ForEach):
+            for target in (action.item, action.index):
+                if target is not None and target not in scope:
+                    found.append(_unknown_name(span, "assigns", what, target, scope))
+        if isinstance(action, expr.Block):
+            continue  # its actions follow (`flat`); where it stands: `_misplaced_blocks`
+        if isinstance(action, expr.Cancel | expr.If | expr.ForEach | expr.Log):
+            for value in expr.action_exprs(action):
+                found.extend(_names(value, scope, fields, span, what))
+            continue
+        for value in expr.action_exprs(action):
+            found.extend(_names(value, scope, fields, span, what))
         found.extend(_event_use(index, action, span, what))
     return found
 

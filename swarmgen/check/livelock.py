@@ -280,8 +280,13 @@ class _Run:
         an input from outside may come first and end a loop through it, so it is left to the
         step bound (a loop that never ends its macrostep never lets it be taken either)."""
         found = []
-        for action in actions:
-            if isinstance(action, expr.Raise) and not action.args:
+        for action in expr.flat(actions):
+            if (
+                isinstance(action, expr.Raise)
+                and not action.args
+                and action.delay is None
+                and action.target is None
+            ):
                 event = self.index.events_by_name.get(action.event)
                 if event is None or not event.fields:
                     found.append(event.ident if event is not None else identifier(action.event))

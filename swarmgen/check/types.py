@@ -88,6 +88,16 @@ class _Typer:
             return self.scope.names.get(e.name)
         if isinstance(e, expr.EventField):
             return self.scope.fields.get(e.field)
+        if isinstance(e, expr.ListOf):  # a sequence of the items' type, when they agree
+            kinds = {self.infer(item) for item in e.items}
+            kind = kinds.pop() if len(kinds) == 1 else None
+            return f"{kind}[]" if kind is not None and not kind.endswith("[]") else None
+        if isinstance(e, expr.InState):
+            return "bool"
+        if isinstance(e, expr.System):  # `_event` is read field by field
+            return "string" if e.name in ("_sessionid", "_name") else None
+        if isinstance(e, expr.Attr) and isinstance(e.obj, expr.System):
+            return None if e.name == "data" or e.obj.name != "_event" else "string"
         if isinstance(e, expr.Attr):
             return self._attr(e)
         if isinstance(e, expr.Unary):
@@ -234,6 +244,39 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
                 f"'{action.target}' is {_word(target or '')}, assigned {_word(value or '')}"
             )
         return
+    if isinstance(action, expr.Cancel):
+        return
+    if isinstance(action, expr.ForEach):
+        _loop(index, typer, action, datatypes)
+        return
+    if isinstance(action, expr.Done):  # refused outside a final state (check.expressions)
+        return
+    if isinstance(action, expr.Log):
+        typer.infer(action.value)
+        return
+    if isinstance(action, expr.Block):
+        for inner in action.actions:
+            _action(index, typer, inner, datatypes)
+        return
+    if isinstance(action, expr.If):
+        for branch in action.branches:
+            if branch.cond is not None:
+                typer.infer(branch.cond)
+            for inner in branch.actions:
+                _action(index, typer, inner, datatypes)
+        return
+    if isinstance(action, expr.Raise) and action.target is not None:
+        target = typer.infer(action.target)
+        if target is not None and target != "string":
+            typer.errors.append(f"the target of '{action.event}' is {_word(target)}, not a string")
+    if isinstance(action, expr.Raise) and action.delay is not None:
+        amount = typer.infer(action.delay.amount)
+        wanted = "string" if not action.delay.unit else "number"
+        if amount is not None and amount != wanted:
+            needs = "a duration string" if not action.delay.unit else "a number"
+            typer.errors.append(
+                f"the delay of '{action.event}' is {_word(amount)}, it needs {needs}"
+            )
     event = index.events_by_name.get(action.event)
     fields = {f.name: of(f, datatypes) for f in (event.fields if event else ())}
     for arg in action.args:
@@ -242,6 +285,22 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
             typer.errors.append(
                 f"field '{arg.name}' of '{action.event}' is {_word(fields[arg.name] or '')}, given {_word(value or '')}"
             )
+
+
+def _loop(index: ModelIndex, typer: _Typer, action: expr.ForEach, datatypes: set[str]) -> None:
+    """`for item, i in xs`: xs a sequence whose items fit `item`, `i` a number."""
+    array = typer.infer(action.array)
+    if array is not None and not array.endswith("[]"):
+        typer.errors.append(f"'for' takes a sequence, not {_word(array)}: `{_text(action.array)}`")
+    item = typer.scope.names.get(action.item)
+    if array is not None and array.endswith("[]") and not _compatible(item, array[:-2]):
+        typer.errors.append(
+            f"'{action.item}' is {_word(item or '')}, given items of {_word(array)}"
+        )
+    if action.index is not None and not _compatible(typer.scope.names.get(action.index), "number"):
+        typer.errors.append(f"the index '{action.index}' of a 'for' is a number")
+    for inner in action.actions:
+        _action(index, typer, inner, datatypes)
 
 
 def _report(typer: _Typer, span: Span) -> list[Diagnostic]:

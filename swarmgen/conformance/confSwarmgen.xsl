@@ -57,7 +57,11 @@
 <xsl:template match="@conf:varExpr | @conf:varChildExpr"><xsl:attribute name="expr">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
 <xsl:template match="@conf:systemVarExpr"><xsl:attribute name="expr"><xsl:value-of select="."/></xsl:attribute></xsl:template>
 <xsl:template match="@conf:varNonexistentStruct"><xsl:attribute name="expr">Var<xsl:value-of select="."/>.bar</xsl:attribute></xsl:template>
-<xsl:template match="@conf:illegalExpr"><xsl:attribute name="expr">return</xsl:attribute></xsl:template>
+<!-- An expression that fails when evaluated (confEcma.xsl: `return`, which Qt's ECMAScript
+     refuses only at run time). swarmgen refuses text that does not parse before anything runs
+     (SG062), so the failing expression of its datamodel is a division by zero: error.execution
+     at run time, as the tests want. -->
+<xsl:template match="@conf:illegalExpr"><xsl:attribute name="expr">1 / 0</xsl:attribute></xsl:template>
 
 <xsl:template match="conf:incrementID">
   <assign xmlns="http://www.w3.org/2005/07/scxml" location="Var{@id}" expr="Var{@id} + 1"/>
@@ -130,7 +134,8 @@
 <xsl:template match="@conf:nameVarVal"><xsl:attribute name="cond">_name === '<xsl:value-of select="."/>'</xsl:attribute></xsl:template>
 <xsl:template match="@conf:varPrefix"><xsl:attribute name="cond">startsWith(Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[4]"/>, Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[2]"/>)</xsl:attribute></xsl:template>
 <xsl:template match="@conf:inState"><xsl:attribute name="cond">In('<xsl:value-of select="."/>')</xsl:attribute></xsl:template>
-<xsl:template match="@conf:nonBoolean"><xsl:attribute name="cond">return</xsl:attribute></xsl:template>
+<!-- a cond that cannot be evaluated to a boolean: one that fails (see illegalExpr) -->
+<xsl:template match="@conf:nonBoolean"><xsl:attribute name="cond">1 / 0 == 0</xsl:attribute></xsl:template>
 <xsl:template match="@conf:isBound"><xsl:attribute name="cond">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
 <xsl:template match="@conf:unboundVar"><xsl:attribute name="cond">typeof Var<xsl:value-of select="."/> === 'undefined'</xsl:attribute></xsl:template>
 <xsl:template match="@conf:systemVarIsBound"><xsl:attribute name="cond"><xsl:value-of select="."/></xsl:attribute></xsl:template>
@@ -139,7 +144,8 @@
 <xsl:template match="@conf:false"><xsl:attribute name="cond">false</xsl:attribute></xsl:template>
 <xsl:template match="@conf:eventFieldsAreBound"><xsl:attribute name="cond">'name' in _event</xsl:attribute></xsl:template>
 <xsl:template match="@conf:eventDataHasField"><xsl:attribute name="cond"><xsl:value-of select="."/> in _event.data</xsl:attribute></xsl:template>
-<xsl:template match="@conf:eventFieldHasNoValue"><xsl:attribute name="cond">typeof _event.<xsl:value-of select="."/> === 'undefined'</xsl:attribute></xsl:template>
+<!-- a field of _event W3C leaves blank: "" in swarmgen's datamodel (the value rule) -->
+<xsl:template match="@conf:eventFieldHasNoValue"><xsl:attribute name="cond">_event.<xsl:value-of select="."/> == ''</xsl:attribute></xsl:template>
 <xsl:template match="@conf:eventLanguageMatchesDatamodel"><xsl:attribute name="cond">_event.language == 'ecmascript'</xsl:attribute></xsl:template>
 <xsl:template match="@conf:originTypeEq"><xsl:attribute name="cond">_event.origintype == '<xsl:value-of select="."/>'</xsl:attribute></xsl:template>
 

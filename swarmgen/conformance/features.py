@@ -67,6 +67,8 @@ def feature(diagnostic: Diagnostic, root: etree._Element | None = None) -> str:
         return _send(_at(root, diagnostic.span.line, "send"))
     if element == "data":
         return "data src/content"
+    if element == "assign" and "read-only" in message:
+        return "assign to a system variable (refused when compiled)"
     if element == "assign":
         return "assign: location or content"
     return _ELEMENTS.get(element, f"<{element}>")

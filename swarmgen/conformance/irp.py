@@ -147,10 +147,12 @@ class VirtualHost:
     due time (then start order); behaviours and the swarm bus do not exist in the IRP."""
 
     def __init__(self) -> None:
-        self.now = 0
+        self.now: float = 0
         self.queue: list[Event] = []
-        self.timers: list[tuple[int, int, str, str]] = []  # (due, order, state id, event)
+        self.timers: list[tuple[float, int, str, str]] = []  # (due, order, state id, event)
         self._order = 0
+        # delayed raises by their order in `timers` (where their state id is ""): (key, event)
+        self.delayed: dict[int, tuple[str, Event]] = {}
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
         """No IRP test calls a swarmgen behaviour (the front end refuses `<invoke>`)."""
@@ -168,6 +170,17 @@ class VirtualHost:
         self.timers = [t for t in self.timers if (t[2], t[3]) != (node.id, event)]
         heapq.heapify(self.timers)
 
+    def start_delayed(self, key: str, event: Event, delay_ms: float) -> None:
+        """Schedule the delayed event `delay_ms` of virtual time from now."""
+        self._order += 1
+        self.delayed[self._order] = (key, event)
+        heapq.heappush(self.timers, (self.now + delay_ms, self._order, "", event.name))
+
+    def cancel_delayed(self, key: str) -> None:
+        """Drop the pending delayed events of `key`."""
+        for order in [o for o, (k, _) in self.delayed.items() if k == key]:
+            del self.delayed[order]
+
     def send_swarm(self, event: Event) -> None:
         """The IRP has no swarm: a send to it goes nowhere."""
 
@@ -181,9 +194,11 @@ class VirtualHost:
             if self.queue:
                 yield self.queue.pop(0)
             elif self.timers and self.timers[0][0] <= MAX_VIRTUAL_MS:
-                due, _, _, name = heapq.heappop(self.timers)
-                self.now = due
-                yield engine.make_event(name, None, "timer")
+                due, order, state, name = heapq.heappop(self.timers)
+                if state or order in self.delayed:  # a delayed raise cancelled: nothing
+                    self.now = due
+                    delayed = self.delayed.pop(order, None)
+                    yield delayed[1] if delayed else engine.make_event(name, None, "timer")
             else:
                 return
 

@@ -297,6 +297,10 @@ UNKNOWN_NAME = register(
     variants={
         "near": M("{what} uses '{name}', which is not member data", "did you mean '{near}'?"),
         "assigns": M("{what} assigns '{name}', which is not member data", _DECLARE_DATA),
+        "state": M(
+            "{what} tests In('{name}'), but no state has that name",
+            "name a state of the machine (or its id in the SCXML document)",
+        ),
         "assigns-near": M(
             "{what} assigns '{name}', which is not member data", "did you mean '{near}'?"
         ),

@@ -32,7 +32,7 @@ _NUMBER = re.compile(r"(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _OPERATORS = (
     "===", "!==",
     "==", "!=", "<=", ">=", "&&", "||", "++", "--", "+=", "-=", "*=", "/=", "%=", "**", "//",
-    "+", "-", "*", "/", "%", "<", ">", "(", ")", ",", ".", "=", "!", ";",
+    "+", "-", "*", "/", "%", "<", ">", "(", ")", "[", "]", ",", ".", "=", "!", ";",
 )  # fmt: skip
 # The operators by first character, longest first: the same first match as scanning the whole
 # tuple, without trying thirty prefixes per operator token.

@@ -10,15 +10,14 @@ from swarmgen.expr.lex import Lexer, Tok
 from swarmgen.expr.render import to_text
 from swarmgen.expr.tree import (
     COMPARISONS,
+    EVENT_META,
     MAX_DEPTH,
     MAX_TEXT,
     NOT_PREC,
     PREC,
     RESERVED,
+    SYSTEM_VARIABLES,
     UNARY_PREC,
-    Action,
-    Arg,
-    Assign,
     Attr,
     Binary,
     Binding,
@@ -27,9 +26,10 @@ from swarmgen.expr.tree import (
     Else,
     EventField,
     Expr,
+    InState,
+    ListOf,
     Name,
-    Raise,
-    Send,
+    System,
     Unary,
     UnOp,
     Value,
@@ -47,7 +47,6 @@ _CONSTANTS: dict[str, Value] = {
 _COMPOUND = frozenset({"+=", "-=", "*=", "/=", "%="})
 # Operators borrowed from Java/C/ECMAScript that get a message of their own.
 _EXPLAINED = _COMPOUND | {"++", "--", "===", "!==", "**", "//"}
-_NOT_ACTION = "an action must be `name = expression`, `raise <event>(...)` or `send <event>(...)`"
 _NOT_BINDING = "a binding must be `name = expression`"
 
 # A parsed expression together with its depth: the depth limit keeps the recursive renderers
@@ -186,6 +185,8 @@ class _Parser:
             self.advance()
             node = self.deeper(Attr(obj=node[0], name=name.text), node[1], name)
         tok = self.peek()
+        if self.is_op("[", tok) and _is_path(node[0]):
+            self.fail(tok, "indexing is not part of the expression language")
         if self.is_op("(", tok) and _is_path(node[0]):
             self.fail(
                 tok,
@@ -204,6 +205,8 @@ class _Parser:
             return self.word()
         if self.is_op("(", tok):
             return self.group()
+        if self.is_op("[", tok):
+            return self.list_of()
         self.expected_expression(tok)
 
     def word(self) -> _Node:
@@ -216,6 +219,10 @@ class _Parser:
         if tok.text == "else":
             self.else_misplaced(tok)
         self.advance()
+        if tok.text in SYSTEM_VARIABLES:
+            return self.system(tok)
+        if tok.text == "In" and self.is_op("(", self.peek()):
+            return self.in_state()
         if tok.text != "event":
             return Name(name=tok.text), 1
         if not self.is_op(".", self.peek()):
@@ -226,6 +233,56 @@ class _Parser:
             self.fail(field, "expected a field name after 'event.'")
         self.advance()
         return EventField(field=field.text), 1
+
+    def in_state(self) -> _Node:
+        """`In("S")`: a state's name (or chart id) in quotes."""
+        opening = self.advance()
+        name = self.peek()
+        if name.kind != "str" or not isinstance(name.value, str):
+            self.fail(name, 'In() takes a state name in quotes: In("Searching")')
+        self.advance()
+        self.close(opening)
+        try:
+            return InState(state=name.value), 1
+        except ValueError as err:
+            self.fail(name, str(err).splitlines()[-1])
+
+    def system(self, tok: Tok) -> _Node:
+        """A system variable; `_event` only through one of its fields."""
+        variable = System(name=tok.text)  # one of SYSTEM_VARIABLES
+        if tok.text != "_event":
+            return variable, 1
+        if not self.is_op(".", self.peek()):
+            self.fail(tok, "`_event` needs a field: _event.name, _event.type, ...")
+        self.advance()
+        field = self.peek()
+        if field.kind != "word" or field.text not in EVENT_META:
+            known = ", ".join(sorted(EVENT_META))
+            self.fail(field, f"`_event` has the fields {known}")
+        self.advance()
+        return Attr(obj=variable, name=field.text), 2
+
+    def list_of(self) -> _Node:
+        """`[a, b, ...]`: a sequence literal."""
+        opening = self.advance()
+        self.enter(opening)
+        items: list[Expr] = []
+        depth = 1
+        while not self.is_op("]", self.peek()):
+            item, item_depth = self.expr(0)
+            items.append(item)
+            depth = max(depth, item_depth + 1)
+            if not self.is_op(",", self.peek()):
+                break
+            self.advance()
+        tok = self.peek()
+        if not self.is_op("]", tok):
+            if tok.kind in ("nl", "eof") or self.is_op(";", tok):
+                self.fail(tok, "missing ']'")
+            self.unexpected(tok)
+        self.advance()
+        self.nest -= 1
+        return ListOf(items=tuple(items)), depth
 
     def group(self) -> _Node:
         opening = self.advance()
@@ -315,18 +372,6 @@ class _Parser:
             if not self.at_end_of_statement():
                 self.unexpected(self.peek())
 
-    def action(self) -> Assign | Raise | Send:
-        tok = self.peek()
-        # `send = 1` assigns member data named `send`
-        if (
-            tok.kind == "word"
-            and tok.text in ("raise", "send")
-            and not self.is_op("=", self.peek(1))
-        ):
-            return self.event_action()
-        target, value = self.assignment(_NOT_ACTION)
-        return Assign(target=target, value=value)
-
     def assignment(self, what: str) -> tuple[str, Expr]:
         start = self.peek()
         lhs, _ = self.expr(0)
@@ -340,45 +385,6 @@ class _Parser:
         self.advance()
         value, _ = self.expr(0)
         return lhs.name, value
-
-    def event_action(self) -> Raise | Send:
-        verb = self.advance()
-        name = self.peek()
-        if name.kind != "word":
-            self.fail(name, f"expected an event name after '{verb.text}'")
-        self.advance()
-        args = self.arguments() if self.is_op("(", self.peek()) else ()
-        if verb.text == "raise":
-            return Raise(event=name.text, args=args)
-        return Send(event=name.text, args=args)
-
-    def arguments(self) -> tuple[Arg, ...]:
-        opening = self.advance()
-        args: list[Arg] = []
-        while not self.is_op(")", self.peek()):
-            args.append(self.argument({a.name for a in args}))
-            if not self.is_op(",", self.peek()):
-                break
-            self.advance()
-        self.close(opening)
-        return tuple(args)
-
-    def argument(self, seen: set[str]) -> Arg:
-        name = self.peek()
-        if name.kind != "word":
-            self.fail(name, f"expected an argument `name = expression`, found {_show_tok(name)}")
-        if name.text in seen:
-            self.fail(name, f"duplicate argument '{name.text}'")
-        self.advance()
-        if not self.is_op("=", self.peek()):
-            self.fail(
-                self.peek(),
-                f"expected '=' after argument name '{name.text}'",
-                hint="event arguments are written `field = expression`",
-            )
-        self.advance()
-        value, _ = self.expr(0)
-        return Arg(name=name.text, value=value)
 
 
 def _assign_hint(lhs: Expr) -> str | None:
@@ -403,15 +409,14 @@ def parse_expr(text: str) -> Expr:
     parser = _Parser(text, statements=False)
     node, _ = parser.expr(0)
     parser.expect_end()
+    if isinstance(node, ListOf) and len(node.items) == 1:  # `[x > 1]`: a guard in UML's brackets
+        raise error_at(
+            text,
+            0,
+            "a guard is not a list",
+            "UML shows guards in brackets; write the guard without `[ ]`",
+        )
     return node
-
-
-def parse_actions(text: str) -> tuple[Action, ...]:
-    """Parse an effect (or entry/exit action): statements separated by newlines or `;`."""
-    parser = _Parser(text, statements=True)
-    actions: list[Action] = []
-    parser.statements_of(lambda: actions.append(parser.action()))
-    return tuple(actions)
 
 
 def parse_bindings(text: str) -> tuple[Binding, ...]:

@@ -21,11 +21,15 @@ from swarmgen.expr.tree import (
     Else,
     EventField,
     Expr,
+    InState,
+    ListOf,
     Name,
+    System,
     Unary,
     Value,
 )
 
+_EVENT = System(name="_event")
 _ASCII_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _TEXT_ESCAPES = {"\\": "\\\\", '"': '\\"', "\n": "\\n", "\t": "\\t", "\r": "\\r"}
 
@@ -100,6 +104,12 @@ def to_text(expr: Expr) -> str:
             return expr.name
         case EventField():
             return f"event.{expr.field}"
+        case System():
+            return expr.name
+        case InState():
+            return f"In({_const_text(expr.state)})"
+        case ListOf():
+            return "[" + ", ".join(to_text(i) for i in expr.items) + "]"
         case Attr():
             return f"{to_text(expr.obj)}.{expr.name}"
         case Unary():
@@ -163,6 +173,16 @@ def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:
         case EventField():
             # a field the event does not carry is an error (in Python too), not `undefined`
             return f"$sg.field(_event, {_js_string(expr.field)})"
+        case System():
+            return expr.name  # the SCXML datamodel's own system variables
+        case InState():
+            return f"In({_js_string(expr.state)})"
+        case ListOf():
+            return "[" + ", ".join(to_ecmascript(i, name) for i in expr.items) + "]"
+        case Attr() if expr.obj == _EVENT:
+            # W3C's fields as swarmgen gives them: "" where Qt leaves one undefined, `{}` for
+            # no data (the support script's `$sg.meta`, docs/semantics.md)
+            return f"$sg.meta(_event, {_js_string(expr.name)})"
         case Attr():
             return to_ecmascript(expr.obj, name) + _js_member(expr.name)
         case Unary():
@@ -200,6 +220,12 @@ def to_python(expr: Expr, name: Callable[[str], str], event_field: Callable[[str
             return name(expr.name)
         case EventField():
             return event_field(expr.field)
+        case System():
+            return f"ctx.system({expr.name!r})"
+        case InState():
+            return f"ctx.is_active({expr.state!r})"
+        case ListOf():
+            return "[" + ", ".join(to_python(i, name, event_field) for i in expr.items) + "]"
         case Attr():
             return _py_attr(to_python(expr.obj, name, event_field), expr.name)
         case Unary():

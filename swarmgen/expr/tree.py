@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Collection, Iterator
+from collections.abc import Callable, Collection, Iterable, Iterator
 from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, field_validator
@@ -15,8 +15,13 @@ MAX_DEPTH = 100
 # ECMAScript numbers are doubles: larger integers would silently change value in the SCXML.
 MAX_INT = 2**53 - 1
 
+# W3C SCXML's system variables, read-only (docs/semantics.md, "System variables")
+SYSTEM_VARIABLES = frozenset({"_event", "_sessionid", "_name", "_ioprocessors"})
+# the fields of `_event` (W3C 5.10.1); `_event.data.f` is `event.f`
+EVENT_META = frozenset({"name", "type", "sendid", "origin", "origintype", "invokeid", "data"})
 RESERVED = frozenset(
     {"and", "or", "not", "true", "false", "True", "False", "null", "None", "else", "event"}
+    | SYSTEM_VARIABLES
 )
 
 BinOp = Literal["or", "and", "==", "!=", "<", "<=", ">", ">=", "+", "-", "*", "/", "%"]
@@ -75,7 +80,7 @@ def _not_else(value: Expr) -> Expr:
 
 
 def _path(value: Expr) -> Expr:
-    if not isinstance(value, Name | EventField | Attr):
+    if not isinstance(value, Name | EventField | Attr | System):
         raise ValueError("attribute access needs a name on the left")
     return value
 
@@ -119,12 +124,40 @@ class EventField(_Model):
     field: Ident
 
 
+class System(_Model):
+    """A system variable: `_event` (read through its fields: `_event.name`), `_sessionid`,
+    `_name`, `_ioprocessors` (W3C 5.10); read-only."""
+
+    kind: Literal["system"] = "system"
+    name: Literal["_event", "_sessionid", "_name", "_ioprocessors"]
+
+
+def _state_name(value: str) -> str:
+    if not value or not value.isprintable() or len(value) > 200:
+        raise ValueError("a state name is 1 to 200 printable characters")
+    return value
+
+
+class InState(_Model):
+    """``In("S")``: whether the state named S (or of chart id S) is active (W3C's `In()`)."""
+
+    kind: Literal["in"] = "in"
+    state: Annotated[str, AfterValidator(_state_name)]
+
+
 class Attr(_Model):
     """``obj.name`` where obj is a name, an event field or another attribute access."""
 
     kind: Literal["attr"] = "attr"
     obj: Annotated[Expr, AfterValidator(_path)]
     name: Ident
+
+
+class ListOf(_Model):
+    """``[a, b, ...]``: a sequence of the items' values (what `for` iterates, W3C's arrays)."""
+
+    kind: Literal["list"] = "list"
+    items: tuple[Operand, ...] = ()
 
 
 class Unary(_Model):
@@ -151,7 +184,8 @@ class Else(_Model):
 
 
 Expr = Annotated[
-    Const | Name | EventField | Attr | Unary | Binary | Else, Field(discriminator="kind")
+    Const | Name | EventField | System | InState | ListOf | Attr | Unary | Binary | Else,
+    Field(discriminator="kind"),
 ]
 Operand = Annotated[Expr, AfterValidator(_not_else)]
 
@@ -178,12 +212,30 @@ class Assign(_Model):
     value: Operand
 
 
+DelayUnit = Literal["ms", "s", ""]
+
+
+class Delay(_Model):
+    """``after <amount> <unit>`` of a delayed ``raise``: milliseconds or seconds, or no unit,
+    when the amount's value is a duration string (``"1.5s"``, ``"200ms"``: SCXML's
+    ``delayexpr``)."""
+
+    amount: Operand
+    unit: DelayUnit = "ms"
+
+
 class Raise(_Model):
-    """Raise an event for this member only."""
+    """Raise an event for this member only; with a delay, it arrives after it (W3C: a delayed
+    `<send>` to the session's own external queue), cancellable by its send id."""
 
     kind: Literal["raise"] = "raise"
     event: Ident
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
+    delay: Delay | None = None
+    sendid: Ident | None = None  # `as <name>`: what `cancel <name>` names
+    # `to <expr>`: W3C's <send target>: this member's session (`"#_scxml_" + _sessionid`), or
+    # `"#_internal"`; another session is error.communication, anything else error.execution
+    target: Operand | None = None
 
 
 class Send(_Model):
@@ -194,7 +246,87 @@ class Send(_Model):
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
 
 
-Action = Annotated[Assign | Raise | Send, Field(discriminator="kind")]
+class Done(_Model):
+    """``done(f = expr, ...)``: a final state's done data (W3C `<donedata>`): the fields of the
+    `done.state.<parent>` event entering the final state raises. Only in a final state's entry."""
+
+    kind: Literal["done"] = "done"
+    args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
+    content: Operand | None = None  # `done(expr)`: the event's data is this value (W3C <content>)
+
+
+class Log(_Model):
+    """``log [label,] expr``: the value goes to the member's log (W3C `<log>`); no trace or
+    state changes, an expression that fails raises error.execution as any other."""
+
+    kind: Literal["log"] = "log"
+    label: str = ""
+    value: Operand
+
+
+class Cancel(_Model):
+    """``cancel <name>``: drop the delayed events raised `as <name>` that are still pending;
+    ``cancel (expr)``: those of the send id the expression gives (W3C's `sendidexpr`)."""
+
+    kind: Literal["cancel"] = "cancel"
+    sendid: Ident | None = None
+    expr: Operand | None = None
+
+
+class Branch(_Model):
+    """One branch of an `if`: its condition (None: `else`) and its actions."""
+
+    cond: Operand | None = None
+    actions: tuple[Action, ...] = ()
+
+
+class If(_Model):
+    """``if c then ... elif c then ... else ... end``: the first branch whose condition holds
+    runs (a condition that fails is false and raises error.execution, W3C's `<if>`)."""
+
+    kind: Literal["if"] = "if"
+    branches: tuple[Branch, ...]
+
+
+class Block(_Model):
+    """``block ... end``: an error in it ends only it (W3C: each `<onentry>`/`<onexit>` is a
+    block of its own); only at the top of an entry or exit behaviour."""
+
+    kind: Literal["block"] = "block"
+    actions: tuple[Action, ...] = ()
+
+
+class ForEach(_Model):
+    """``for item[, index] in array do ... end``: the actions once per item of a copy of the
+    sequence, `item` and `index` (from 0) written to member data first (W3C's `<foreach>`)."""
+
+    kind: Literal["foreach"] = "foreach"
+    array: Operand
+    item: DataName
+    index: DataName | None = None
+    actions: tuple[Action, ...] = ()
+
+
+Action = Annotated[
+    Assign | Raise | Send | Cancel | If | ForEach | Done | Log | Block,
+    Field(discriminator="kind"),
+]
+
+Branch.model_rebuild()
+If.model_rebuild()
+ForEach.model_rebuild()
+Block.model_rebuild()
+
+
+def flat(actions: Iterable[Action]) -> Iterator[Action]:
+    """The actions and, for an `if`, the actions of every branch (pre-order)."""
+    for action in actions:
+        yield action
+        if isinstance(action, If):
+            for branch in action.branches:
+                yield from flat(branch.actions)
+        if isinstance(action, ForEach | Block):
+            yield from flat(action.actions)
 
 
 class Binding(_Model):
@@ -208,6 +340,8 @@ class Binding(_Model):
 
 
 def _children(e: Expr) -> tuple[Expr, ...]:
+    if isinstance(e, ListOf):
+        return e.items
     if isinstance(e, Attr):
         return (e.obj,)
     if isinstance(e, Unary):
@@ -235,6 +369,8 @@ def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
     """`event.<f>` read as the member datum `names[f]` instead (depth is bounded by the parser)."""
     if isinstance(expr, EventField) and expr.field in names:
         return Name(name=names[expr.field])
+    if isinstance(expr, ListOf):
+        return _items(expr, lambda e: replace_fields(e, names))
     if isinstance(expr, Attr):
         obj = replace_fields(expr.obj, names)
         return expr if obj is expr.obj else Attr(obj=obj, name=expr.name)
@@ -252,6 +388,8 @@ def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
 def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
     """`E.lit` read as the literal `lit` of enumeration `E` when `E` is one of `enums` (a
     string constant that remembers its enumeration; depth is bounded by the parser)."""
+    if isinstance(expr, ListOf):
+        return _items(expr, lambda e: resolve_enums(e, enums))
     if isinstance(expr, Attr):
         if isinstance(expr.obj, Name) and expr.obj.name in enums:
             return Const(value=expr.name, enum=expr.obj.name)
@@ -270,14 +408,91 @@ def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
 
 def resolve_action_enums(action: Action, enums: Collection[str]) -> Action:
     """An action with its enumeration literals resolved (`resolve_enums`)."""
+    return map_action(action, lambda e: resolve_enums(e, enums))
+
+
+def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
+    """The action with `rewrite` applied to each expression it holds (itself when none
+    changes)."""
+    if isinstance(action, Cancel):
+        if action.expr is None:
+            return action
+        computed = rewrite(action.expr)
+        return action if computed is action.expr else Cancel(expr=computed)
+    if isinstance(action, Log):
+        value = rewrite(action.value)
+        return action if value is action.value else Log(label=action.label, value=value)
+    if isinstance(action, Done):
+        values = [rewrite(a.value) for a in action.args]
+        content = rewrite(action.content) if action.content is not None else None
+        if content is action.content and all(
+            v is a.value for v, a in zip(values, action.args, strict=True)
+        ):
+            return action
+        args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
+        return Done(args=args, content=content)
+    if isinstance(action, Block):
+        inner_actions = tuple(map_action(a, rewrite) for a in action.actions)
+        return action if inner_actions == action.actions else Block(actions=inner_actions)
+    if isinstance(action, ForEach):
+        array, inner = rewrite(action.array), tuple(map_action(a, rewrite) for a in action.actions)
+        if array is action.array and inner == action.actions:
+            return action
+        return ForEach(array=array, item=action.item, index=action.index, actions=inner)
+    if isinstance(action, If):
+        branches = tuple(
+            Branch(
+                cond=rewrite(b.cond) if b.cond is not None else None,
+                actions=tuple(map_action(a, rewrite) for a in b.actions),
+            )
+            for b in action.branches
+        )
+        return action if branches == action.branches else If(branches=branches)
     if isinstance(action, Assign):
-        value = resolve_enums(action.value, enums)
+        value = rewrite(action.value)
         return action if value is action.value else Assign(target=action.target, value=value)
-    values = [resolve_enums(a.value, enums) for a in action.args]
-    if all(v is a.value for v, a in zip(values, action.args, strict=True)):
+    values = [rewrite(a.value) for a in action.args]
+    delay = action.delay if isinstance(action, Raise) else None
+    amount = rewrite(delay.amount) if delay is not None else None
+    given = action.target if isinstance(action, Raise) else None
+    target = rewrite(given) if given is not None else None
+    if (
+        all(v is a.value for v, a in zip(values, action.args, strict=True))
+        and (delay is None or amount is delay.amount)
+        and target is given
+    ):
         return action
     args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
-    return type(action)(event=action.event, args=args)
+    if isinstance(action, Send):
+        return Send(event=action.event, args=args)
+    if delay is not None and amount is not None:
+        delay = Delay(amount=amount, unit=delay.unit)
+    return Raise(event=action.event, args=args, delay=delay, sendid=action.sendid, target=target)
+
+
+def action_exprs(action: Action) -> tuple[Expr, ...]:
+    """The expressions an action evaluates itself (an `if`: its conditions, not its
+    branches' actions: `flat` gives those), in evaluation order."""
+    if isinstance(action, Cancel):
+        return (action.expr,) if action.expr is not None else ()
+    if isinstance(action, Block):
+        return ()
+    if isinstance(action, If):
+        return tuple(b.cond for b in action.branches if b.cond is not None)
+    if isinstance(action, ForEach):
+        return (action.array,)
+    if isinstance(action, Done):
+        return (*(a.value for a in action.args), *([action.content] if action.content else []))
+    if isinstance(action, Log):
+        return (action.value,)
+    if isinstance(action, Assign):
+        return (action.value,)
+    found = tuple(a.value for a in action.args)
+    if isinstance(action, Raise) and action.delay is not None:
+        found = (action.delay.amount, *found)
+    if isinstance(action, Raise) and action.target is not None:
+        found = (action.target, *found)
+    return found
 
 
 def free_names(expr: Expr) -> frozenset[str]:
@@ -288,3 +503,36 @@ def free_names(expr: Expr) -> frozenset[str]:
 def event_fields(expr: Expr) -> frozenset[str]:
     """Fields of the triggering event read by the expression."""
     return frozenset(n.field for n in walk(expr) if isinstance(n, EventField))
+
+
+def in_states(expr: Expr) -> frozenset[str]:
+    """The states `In(...)` tests in the expression."""
+    return frozenset(n.state for n in walk(expr) if isinstance(n, InState))
+
+
+def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
+    """`In(name)` with its name replaced by `ids(name)` (lowering: names to chart ids)."""
+    if isinstance(expr, InState):
+        return InState(state=ids(expr.state))
+    if isinstance(expr, ListOf):
+        return _items(expr, lambda e: resolve_states(e, ids))
+    if isinstance(expr, Attr):
+        obj = resolve_states(expr.obj, ids)
+        return expr if obj is expr.obj else Attr(obj=obj, name=expr.name)
+    if isinstance(expr, Unary):
+        operand = resolve_states(expr.operand, ids)
+        return expr if operand is expr.operand else Unary(op=expr.op, operand=operand)
+    if isinstance(expr, Binary):
+        left, right = resolve_states(expr.left, ids), resolve_states(expr.right, ids)
+        if left is expr.left and right is expr.right:
+            return expr
+        return Binary(op=expr.op, left=left, right=right)
+    return expr
+
+
+def _items(expr: ListOf, rewrite: Callable[[Expr], Expr]) -> ListOf:
+    """The list with `rewrite` applied to its items (itself when none changes)."""
+    items = tuple(rewrite(item) for item in expr.items)
+    if all(new is old for new, old in zip(items, expr.items, strict=True)):
+        return expr
+    return ListOf(items=items)

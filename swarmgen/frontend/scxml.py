@@ -54,6 +54,7 @@ class _Document:
     def __init__(self, b: Builder, root: etree._Element) -> None:
         self.b, self.root = b, root
         self.data_names: dict[str, str] = {}
+        self.setup: list[etree._Element] = []  # `<data>` whose expr is computed at the start
         self.event_names: dict[str, str] = {}  # identifier -> model name
         self.signal_events: dict[str, str] = {}  # model name -> SignalEvent id
         self.time_events: dict[int, str] = {}
@@ -98,8 +99,10 @@ class _Document:
             self.any_ref,
             self.behaviours,
             language,
+            self.declare,
         )
         states = States(self.b, actions, self.package, emitted=sg(root, "machine") is not None)
+        states.setup = self.setup
         states.machine(root, machine)
         states.resolve()
         return RawModel(self.b.file, [self.model], self.b.index, self.b.stereotypes, "scxml")
@@ -121,7 +124,9 @@ class _Document:
                         dg.SCXML_BAD_DOCUMENT, node, "duplicate-id", id=ident, where=where
                     )
                 seen.setdefault(str(ident), node)
-            if in_scxml(node) and tag in ("invoke", "donedata", "finalize"):
+            parent = node.getparent()
+            misplaced = tag == "donedata" and (parent is None or local(parent) != "final")
+            if in_scxml(node) and (tag in ("invoke", "finalize") or misplaced):
                 self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why="not in the IR yet")
             if in_scxml(node) and tag == "script" and not self.support_script(node):
                 self.b.report(
@@ -227,7 +232,8 @@ class _Document:
     def datamodel(self, owner: RawElement) -> None:
         for data in self.data_nodes(report=True):
             ident = str(data.get("id", ""))
-            if data.get("src") is not None or len(data) or (data.text or "").strip():
+            content = (data.text or "").strip()
+            if data.get("src") is not None or len(data) or (content and data.get("expr")):
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,
                     data,
@@ -241,12 +247,16 @@ class _Document:
             name = sg(data, "name") or ident
             self.data_names[ident] = name
             prop = self.b.make("ownedAttribute", "Property", owner, data, {"name": name})
+            source = data.get("expr") or content or "null"  # inline content: the value's text
             try:
-                value = literal(str(data.get("expr", "null")))
-            except ExprUnsupported as err:
-                self.b.report(
-                    dg.SCXML_EXPRESSION, data, text=str(data.get("expr"))[:200], why=str(err)
-                )
+                value = literal(source)
+                if isinstance(value, list):  # a sequence: made by the language's `[...]`
+                    raise ExprUnsupported("an array")
+            except ExprUnsupported:
+                # computed when the machine starts (W3C's early binding, before the initial
+                # transition): an untyped datum, assigned by the root's initial transition
+                self.setup.append(data)
+                self.b.make("defaultValue", "LiteralNull", prop, data)
                 continue
             type_name = sg(data, "type") or self.value_type(name, "", value, data)
             self.b.typed(prop, type_name, self.types)
@@ -254,6 +264,14 @@ class _Document:
                 self.b.make("defaultValue", "LiteralNull", prop, data)
             else:
                 self.b.literal(prop, "defaultValue", value, data)
+
+    def declare(self, ident: str, node: etree._Element) -> None:
+        """A datum no `<data>` declares that `<foreach>` writes (W3C creates it): untyped."""
+        if ident in self.data_names or self.owner is None:
+            return
+        self.data_names[ident] = ident
+        prop = self.b.make("ownedAttribute", "Property", self.owner, node, {"name": ident})
+        self.b.make("defaultValue", "LiteralNull", prop, node)
 
     def library(self) -> None:
         """`<sg:library>`: one package per library, a class, an operation per behaviour."""
@@ -318,7 +336,7 @@ class _Document:
                     str(p.get("name", ""))
                     for p in node
                     if isinstance(p.tag, str) and local(p) == "param"
-                ]
+                ] + str(node.get("namelist", "")).split()  # a namelist's data ids are fields
             for name in names:
                 if (
                     name

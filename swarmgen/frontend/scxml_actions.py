@@ -3,6 +3,7 @@ triggers (the reverse of docs/scxml.md's mapping), with a located diagnostic for
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -11,17 +12,21 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen import expr
 from swarmgen.frontend.raw import RawElement
-from swarmgen.frontend.scxml_expr import ExprUnsupported, InState, Marker, conjuncts, translate
+from swarmgen.frontend.scxml_expr import (
+    ExprUnsupported,
+    InState,
+    Marker,
+    conjuncts,
+    literal,
+    translate,
+)
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, in_sg, local
 
 _NOT_IN_IR = {
-    "if": "conditional actions are not in the IR yet",
-    "elseif": "conditional actions are not in the IR yet",
-    "else": "conditional actions are not in the IR yet",
+    "elseif": "<elseif> is read only inside <if>",
+    "else": "<else> is read only inside <if>",
     "foreach": "loops are not in the IR yet",
-    "log": "logging is not in the IR yet",
     "script": "scripts other than swarmgen's $sg support script are not run",
-    "cancel": "only the timer pattern's <cancel> (docs/scxml.md) is read",
     "invoke": "invoking other sessions is not in the IR",
 }
 
@@ -38,6 +43,7 @@ class Actions:
     any_ref: Callable[[], str]  # the AnyReceiveEvent's id
     behaviours: dict[str, str]  # behaviour name -> operation id
     language: str  # "ecmascript", "null" or "swarmgen"
+    declare: Callable[[str, etree._Element], None]  # a datum `<foreach>` names, if new
     timers: dict[str, int] = field(default_factory=dict)  # timer event -> delay (ms)
 
     def text(self, source: str, node: etree._Element) -> str | None:
@@ -55,18 +61,20 @@ class Actions:
     def state_behaviour(self, node: etree._Element, vertex: RawElement) -> str | None:
         """onentry/onexit into entry/exit behaviours, the sg:call into the doActivity, timers
         remembered for the transitions. Returns the called behaviour's name."""
-        entry: list[str] = []
+        entries: list[list[str]] = []
         call: str | None = None
         for block in children(node, "onentry"):
+            entries.append([])
             for kid in block.iterchildren(tag=etree.Element):
                 if in_sg(kid) and local(kid) == "call":
                     call = self.call(kid, vertex)
                 elif in_scxml(kid) and local(kid) == "send" and self.timer(kid):
                     continue
                 else:
-                    entry.extend(self.action(kid))
-        exit_: list[str] = []
+                    entries[-1].extend(self.action(kid))
+        exits: list[list[str]] = []
         for block in children(node, "onexit"):
+            exits.append([])
             for kid in block.iterchildren(tag=etree.Element):
                 if (
                     in_scxml(kid)
@@ -74,11 +82,62 @@ class Actions:
                     and str(kid.get("sendid")) in self.timers
                 ):
                     continue
-                exit_.extend(self.action(kid))
+                exits[-1].extend(self.action(kid))
+        entry, exit_ = _blocked(entries), _blocked(exits)
         for feature, lines, source in (("entry", entry, "onentry"), ("exit", exit_, "onexit")):
             if lines:
                 self.body(vertex, feature, lines, children(node, source)[0])
         return call
+
+    def final_behaviour(self, node: etree._Element, vertex: RawElement) -> None:
+        """A `<final>`'s onentry and onexit (swarmgen's extension of UML's final state) and its
+        `<donedata>` `<param>`s as the entry's last action, `done(f = expr, ...)`."""
+        for source, feature in (("onentry", "entry"), ("onexit", "exit")):
+            blocks = children(node, source)
+            lines = [
+                line
+                for block in blocks
+                for kid in block.iterchildren(tag=etree.Element)
+                for line in self.action(kid)
+            ]
+            if source == "onentry":
+                lines += self.donedata(node)
+            if lines:
+                self.body(vertex, feature, lines, blocks[0] if blocks else node)
+
+    def donedata(self, node: etree._Element) -> list[str]:
+        """`<donedata>` with `<param name expr|location>`s: `done(name = expr, ...)`."""
+        found: list[str] = []
+        for block in children(node, "donedata"):
+            contents = children(block, "content")
+            if contents:  # the whole data: `done(expr)`
+                content = contents[0]
+                text = content.get("expr")
+                if text is None and not len(content):  # inline: JSON, else the text itself
+                    inline = (content.text or "").strip()
+                    try:
+                        constant = literal(inline)
+                    except ExprUnsupported:
+                        constant = inline
+                    if not isinstance(constant, bool | int | float | str) or constant is None:
+                        constant = inline
+                    text = expr.to_ecmascript(expr.Const(value=constant))
+                value = self.text(text, content) if text is not None else None
+                if value is None and len(content):
+                    why = "a <content> is an expression, not XML"
+                    self.b.report(dg.SCXML_UNSUPPORTED, content, element="content", why=why)
+                found += [f"done({value})"] if value is not None else []
+                continue
+            fields = []
+            for param in children(block, "param"):
+                given = (
+                    param.get("expr") if param.get("expr") is not None else param.get("location")
+                )
+                value = self.text(str(given or ""), param)
+                if value is not None:
+                    fields.append(f"{param.get('name')} = {value}")
+            found.append(f"done({', '.join(fields)})")
+        return found
 
     def timer(self, node: etree._Element) -> bool:
         """`<send event="after.S.n" id=... delay="Nms"/>`: the emitted time-event pattern."""
@@ -137,8 +196,17 @@ class Actions:
             return self.event_action(node, "send", children(node, "param", sg_ns=True))
         if not in_scxml(node):
             return []  # foreign elements are ignored, as SCXML engines do
-        if tag == "assign":
-            location, value = str(node.get("location", "")), node.get("expr")
+        if tag in ("assign", "data"):  # a `<data expr>` computed at the start: an assignment
+            location, value = (
+                str(node.get("location" if tag == "assign" else "id", "")),
+                node.get("expr"),
+            )
+            if value is None and not len(node) and (node.text or "").strip():
+                value = (node.text or "").strip()  # inline content: an expression's text
+            if location in expr.SYSTEM_VARIABLES:
+                why = "system variables are read-only: swarmgen refuses the assignment when it compiles (W3C: error.execution when it runs)"
+                self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why=why)
+                return []
             text = self.text(str(value), node) if value is not None else None
             if value is None or not location.isidentifier():
                 self.b.report(
@@ -155,6 +223,19 @@ class Actions:
             return [f"raise {self.event_name(str(node.get('event', '')))}"]
         if tag == "send":
             return self.internal_send(node)
+        if tag == "cancel":
+            return self.cancel(node)
+        if tag == "if":
+            return self.conditional(node)
+        if tag == "foreach":
+            return self.loop(node)
+        if tag == "log":  # `log "label", expr` (a log without expr logs its label)
+            label = str(node.get("label", ""))
+            value = self.text(str(node.get("expr")), node) if node.get("expr") else '""'
+            if value is None:
+                return []
+            quoted = expr.to_text(expr.Const(value=label))
+            return [f"log {quoted}, {value}" if label else f"log {value}"]
         self.b.report(
             dg.SCXML_UNSUPPORTED,
             node,
@@ -164,32 +245,127 @@ class Actions:
         return []
 
     def internal_send(self, node: etree._Element) -> list[str]:
-        """`<send target="#_internal">`: a raise with data; any other send is reported."""
-        extra = [
-            a
-            for a in (
-                "delay",
-                "delayexpr",
-                "type",
-                "typeexpr",
-                "targetexpr",
-                "eventexpr",
-                "namelist",
-                "idlocation",
-            )
-            if node.get(a) is not None
-        ]
-        if node.get("target") != "#_internal" or extra or children(node, "content"):
-            why = 'only <send target="#_internal"> with <param>s (a raise with data) and the timer pattern are read'
+        """`<send>` to this session: `#_internal` without a delay is a raise with data; with a
+        delay, or without a target (the session's external queue), a delayed raise (`after 0
+        ms` without a delay); any other send is reported."""
+        why = _unread_send(node)
+        if why is not None:
             self.b.report(dg.SCXML_UNSUPPORTED, node, element="send", why=why)
             return []
-        return self.event_action(node, "raise", children(node, "param"))
+        lines = self.event_action(node, "raise", children(node, "param"))
+        target, targetexpr = node.get("target"), node.get("targetexpr")
+        to = ""
+        if targetexpr is not None or target not in (None, "#_internal"):
+            text = (
+                self.text(targetexpr, node)
+                if targetexpr is not None
+                else expr.to_text(expr.Const(value=str(target)))
+            )
+            if text is None:
+                return []
+            to = f" to ({text})"  # W3C's <send target>: docs/semantics.md, "Targets"
+        delayed = target is None or {"delay", "delayexpr"} & set(node.attrib)
+        if not lines or not (delayed or to):
+            return lines
+        if to and not {"delay", "delayexpr"} & set(node.attrib):
+            return [f"{lines[0]}{to}"]
+        delay = self.delay(node)
+        if delay is None:
+            return []
+        sendid = node.get("id")
+        return [f"{lines[0]}{to} after {delay}" + (f" as {sendid}" if sendid else "")]
+
+    def delay(self, node: etree._Element) -> str | None:
+        """The `after` of a delayed send: `N ms`/`N s` from `delay`, an expression from
+        `delayexpr` (swarmgen's own `$sg.delay(e, scale)` and `$sg.duration(e)` read back)."""
+        literal, source = node.get("delay"), node.get("delayexpr")
+        if source is None:
+            found = _LITERAL_DELAY.fullmatch(literal or "0ms")
+            if found is None:
+                self.b.report(
+                    dg.SCXML_UNSUPPORTED,
+                    node,
+                    "attribute",
+                    attribute="delay",
+                    value=str(literal)[:200],
+                    element="send",
+                    why="a delay is a number of ms or s (`500ms`, `1.5s`)",
+                )
+                return None
+            return f"{found.group(1)} {found.group(2)}"
+        own = _OWN_DELAY.fullmatch(source)
+        if own is not None:
+            inner = self.text(own.group(1) or own.group(3), node)
+            unit = "" if own.group(2) is None else (" s" if own.group(2) == "1000" else " ms")
+            return f"({inner}){unit}" if inner is not None else None
+        text = self.text(source, node)
+        return f"({text})" if text is not None else None
+
+    def conditional(self, node: etree._Element) -> list[str]:
+        """`<if cond>` ... `<elseif cond/>` ... `<else/>` ... `</if>` as `if c then ... elif c
+        then ... else ... end` (a cond that does not translate is reported, and the if too)."""
+        cond = self.text(str(node.get("cond", "")), node)
+        lines = [f"if {cond} then"]
+        ok = cond is not None
+        for kid in node.iterchildren(tag=etree.Element):
+            if in_scxml(kid) and local(kid) == "elseif":
+                cond = self.text(str(kid.get("cond", "")), kid)
+                ok = ok and cond is not None
+                lines.append(f"elif {cond} then")
+            elif in_scxml(kid) and local(kid) == "else":
+                lines.append("else")
+            else:
+                inner = self.action(kid)
+                ok = ok and not (in_scxml(kid) and not inner and local(kid) != "log")
+                lines += inner
+        return [*lines, "end"] if ok else []
+
+    def loop(self, node: etree._Element) -> list[str]:
+        """`<foreach array item index>` as `for item, index in array do ... end`; an item or
+        index no `<data>` declares is declared (W3C creates it)."""
+        item, index = node.get("item"), node.get("index")
+        names = [n for n in (item, index) if n is not None]
+        if item is None or not all(n.isidentifier() and not n.startswith("__") for n in names):
+            why = "item and index name data (identifiers)"
+            self.b.report(dg.SCXML_UNSUPPORTED, node, element="foreach", why=why)
+            return []
+        array = self.text(str(node.get("array", "")), node)
+        if array is None:
+            return []
+        for name in names:
+            self.declare(name, node)
+        targets = ", ".join(self.name(n) for n in names)
+        lines = [f"for {targets} in {array} do"]
+        for kid in node.iterchildren(tag=etree.Element):
+            inner = self.action(kid)
+            if in_scxml(kid) and not inner:
+                return []  # reported
+            lines += inner
+        return [*lines, "end"]
+
+    def cancel(self, node: etree._Element) -> list[str]:
+        """`<cancel sendid>`: `cancel id` (the timer pattern's is read with its state)."""
+        sendid, computed = node.get("sendid"), node.get("sendidexpr")
+        if computed is not None and sendid is None:
+            text = self.text(computed, node)
+            return [f"cancel ({text})"] if text is not None else []
+        if sendid is None or not sendid.isidentifier() or sendid.startswith("__"):
+            self.b.report(
+                dg.SCXML_UNSUPPORTED,
+                node,
+                element="cancel",
+                why="swarmgen cancels by a literal sendid that is an identifier",
+            )
+            return []
+        return [f"cancel {sendid}"]
 
     def event_action(
         self, node: etree._Element, verb: str, params: list[etree._Element]
     ) -> list[str]:
         """`raise`/`send` of an event with its fields (defaults left to the emitter)."""
-        fields = []
+        fields = [
+            f"{n} = {self.name(n)}" for n in str(node.get("namelist", "")).split()
+        ]  # W3C: each named datum as a field of its name
         for param in params:
             source = str(param.get("expr", ""))
             if source.lstrip().startswith(("{", "[")):
@@ -233,19 +409,12 @@ class Actions:
         except (ExprUnsupported, expr.ExprError, ValueError) as err:
             self.b.report(dg.SCXML_EXPRESSION, node, text=cond[:200], why=str(err).splitlines()[0])
             return []
-        states = [p.state for p in pieces if isinstance(p, InState)]
-        if states and join is None:
-            self.b.report(
-                dg.SCXML_UNSUPPORTED,
-                node,
-                "attribute",
-                attribute="cond",
-                value=cond[:200],
-                element="transition",
-                why="In() is read only as a join's sources (sg:join)",
-            )
-            return []
-        terms = [p for p in pieces if not isinstance(p, InState | Marker)]
+        states = [p.state for p in pieces if isinstance(p, InState)] if join else []
+        terms: list[expr.Expr] = [
+            expr.InState(state=p.state) if isinstance(p, InState) else p
+            for p in pieces
+            if not isinstance(p, Marker) and not (join and isinstance(p, InState))
+        ]
         if terms:
             whole = terms[0]
             for term in terms[1:]:
@@ -273,6 +442,12 @@ class Actions:
                 found.append((event, self.time_ref(self.timers[event])))
             elif event == "*":
                 found.append(("*", self.any_ref()))
+            elif event.removesuffix(".*") in ("error", "error.execution", "error.communication"):
+                found.append((event.removesuffix(".*"), None))
+            elif event.removesuffix(".*") in ("done", "done.state") or (
+                event.startswith("done.state.") and len(event) > 11
+            ):
+                found.append((event.removesuffix(".*"), None))  # another state's completion
             elif (
                 event.split(".")[0] in ("done", "error", "outcome", "after") or event in triggerless
             ):
@@ -283,3 +458,33 @@ class Actions:
                 name = self.event_name(event.removesuffix(".*"))
                 found.append((name, self.event_ref(name)))
         return found
+
+
+_LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
+# what swarmgen's emitter writes for a computed delay (docs/scxml.md)
+_OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
+_PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
+_UNREAD_SEND = ("typeexpr", "eventexpr", "idlocation")
+
+
+def _unread_send(node: etree._Element) -> str | None:
+    """Why swarmgen does not read this `<send>`, or None."""
+    sendid = node.get("id")
+    if node.get("type") not in (None, _PROCESSOR):
+        return "a send through another I/O processor is not in the IR"
+    if any(node.get(a) is not None for a in _UNREAD_SEND) or children(node, "content"):
+        return "typeexpr, eventexpr, idlocation and <content> are not in the IR yet"
+    if not all(n.isidentifier() for n in str(node.get("namelist", "")).split()):
+        return "a namelist names data ids"
+    if sendid is not None and (not sendid.isidentifier() or sendid.startswith("__")):
+        return "a send id is an identifier"
+    return None
+
+
+def _blocked(blocks: list[list[str]]) -> list[str]:
+    """The lines of several `<onentry>` (`<onexit>`) elements: each a `block ... end` of its
+    own when more than one holds actions (W3C: an error ends only its block), else as they are."""
+    full = [lines for lines in blocks if lines]
+    if len(full) <= 1:
+        return full[0] if full else []
+    return [line for lines in full for line in ("block", *lines, "end")]

@@ -197,6 +197,15 @@ class _Parser:
             inner = self.level(0)
             self.take(")")
             return inner
+        if text == "[":  # an array literal: swarmgen's sequence
+            items: list[expr.Expr] = []
+            while self.peek() != "]":
+                items.append(self.level(0))
+                if self.peek() != ",":
+                    break
+                self.take(",")
+            self.take("]")
+            return expr.ListOf(items=tuple(items))
         if kind == "name":
             return self.named(text)
         raise ExprUnsupported(f"unexpected {text!r}")
@@ -209,6 +218,15 @@ class _Parser:
             return self.support_call()
         if text == "_event":
             return self.event_field()
+        if text in ("_sessionid", "_name", "_ioprocessors"):
+            return self.postfix(expr.System(name=text))
+        if text == "In" and self.peek() == "(":  # In('S') inside an expression
+            self.take("(")
+            kind, state = self.take()
+            self.take(")")
+            if kind != "str":
+                raise ExprUnsupported("In() needs a state id in quotes")
+            return expr.InState(state=_string(state))
         if text in ("In", "typeof", "new", "function", "this", "undefined"):
             raise ExprUnsupported(f"{text} is not in the subset")
         if self.peek() == "(":
@@ -234,12 +252,26 @@ class _Parser:
             self.take(")")
             op = "/" if function == "div" else "%"
             return expr.Binary(op=op, left=left, right=right)
+        if function == "meta":  # `_event.<field>` as the emitter writes it
+            self.take("_event")
+            self.take(",")
+            kind, text = self.take()
+            self.take(")")
+            field = _string(text) if kind == "str" else ""
+            if field not in expr.EVENT_META:
+                raise ExprUnsupported("$sg.meta needs a field of _event in quotes")
+            return self.postfix(expr.Attr(obj=expr.System(name="_event"), name=field))
         raise ExprUnsupported(f"$sg.{function} is only read where the emitter writes it")
 
     def event_field(self) -> expr.Expr:
         self.take(".")
-        if self.take()[1] != "data":
-            raise ExprUnsupported("of _event, only _event.data.<field> is supported")
+        field = self.take()[1]
+        if field != "data" and field in expr.EVENT_META:  # _event.name, .type, ...
+            return self.postfix(expr.Attr(obj=expr.System(name="_event"), name=field))
+        if field != "data":
+            raise ExprUnsupported(f"_event has no field {field!r}")
+        if self.peek() not in (".", "["):
+            return self.postfix(expr.Attr(obj=expr.System(name="_event"), name="data"))
         return self.member(expr.EventField(field="_"), first=True)
 
     def member(self, obj: expr.Expr, first: bool = False) -> expr.Expr:

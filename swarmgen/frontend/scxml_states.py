@@ -43,6 +43,8 @@ class States:
     machines: dict[str, RawElement] = field(default_factory=dict)
     first_region: RawElement | None = None
     emitted: bool = False  # a document swarmgen wrote (the root has sg:machine)
+    # `<data expr>` computed at the start: assigned by the first initial transition made
+    setup: list[etree._Element] = field(default_factory=list)
 
     def machine(self, root: etree._Element, machine: RawElement) -> None:
         """The document's top level as the machine's region(s)."""
@@ -112,6 +114,8 @@ class States:
             transient = self.vertices.get(targets[0])
             if transient is not None and transient.attrs.get("kind") == "initial":
                 return  # the root's transient `initial` state was read as the pseudostate
+        if self.setup:  # the machine's own initial transition, made first
+            body, self.setup = [*self.setup, *body], []
         start = self.b.make("subvertex", "Pseudostate", region, node, {"name": "Initial"})
         if len(targets) > 1:
             fork = self.b.make(
@@ -154,7 +158,7 @@ class States:
             self.vertices[ident] = self.b.make(
                 "subvertex", "FinalState", region, node, {"name": name}, ident
             )
-            self.unsupported_children(node, "onentry", "onexit", "donedata")
+            self.actions.final_behaviour(node, self.vertices[ident])
         elif tag == "history":
             self.history(node, region, ident, name)
         elif tag == "state" and _root_initial(node, ident):

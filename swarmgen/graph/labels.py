@@ -33,7 +33,47 @@ def action_text(action: expr.Action) -> str:
         case expr.Raise() | expr.Send():
             verb = "raise" if isinstance(action, expr.Raise) else "send"
             args = f"({_args_text(action.args)})" if action.args else ""
-            return f"{verb} {action.event}{args}"
+            return f"{verb} {action.event}{args}{_delay_text(action)}"
+        case expr.Cancel() if action.expr is not None:
+            return f"cancel ({expr.to_text(action.expr)})"
+        case expr.Cancel():
+            return f"cancel {action.sendid}"
+        case expr.If():
+            return _if_text(action)
+        case expr.Block():
+            return f"block {'; '.join(action_text(a) for a in action.actions)} end"
+        case expr.Log():
+            label = f"{expr.to_text(expr.Const(value=action.label))}, " if action.label else ""
+            return f"log {label}{expr.to_text(action.value)}"
+        case expr.Done():
+            return f"done({_args_text(action.args)})"
+        case expr.ForEach():
+            names = action.item + (f", {action.index}" if action.index else "")
+            body = "; ".join(action_text(a) for a in action.actions)
+            return f"for {names} in {expr.to_text(action.array)} do {body} end"
+
+
+def _if_text(action: expr.If) -> str:
+    parts = []
+    for number, branch in enumerate(action.branches):
+        body = "; ".join(action_text(a) for a in branch.actions)
+        if branch.cond is None:
+            parts.append(f"else {body}")
+        else:
+            keyword = "if" if number == 0 else "elif"
+            parts.append(f"{keyword} {expr.to_text(branch.cond)} then {body}")
+    return " ".join(parts) + " end"
+
+
+def _delay_text(action: expr.Raise | expr.Send) -> str:
+    if not isinstance(action, expr.Raise):
+        return ""
+    to = f" to {expr.to_text(action.target)}" if action.target is not None else ""
+    if action.delay is None:
+        return to
+    unit = f" {action.delay.unit}" if action.delay.unit else ""
+    named = f" as {action.sendid}" if action.sendid else ""
+    return f"{to} after {expr.to_text(action.delay.amount)}{unit}{named}"
 
 
 def actions_text(actions: Iterable[expr.Action], opaque: Iterable[ir.OpaqueCode]) -> str:

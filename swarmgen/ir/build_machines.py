@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.frontend.raw import RawElement
 from swarmgen.ir.build_bodies import actions_of, activity_call
 from swarmgen.ir.build_context import (
@@ -118,17 +119,44 @@ def _vertex(b: Builder, element: RawElement, ctx: MachineContext) -> Vertex | No
     if element.id:
         ctx.vertices[element.id] = element
     if element.uml_type == "FinalState":
-        _final_content(b, element)
-        return FinalState(id=element.id or element.span.path, name=element.name, span=element.span)
+        return _final_state(b, element)
     if element.uml_type == "Pseudostate":
         return _pseudostate(b, element, ctx)
     return _state(b, element, ctx)
 
 
+def _final_state(b: Builder, element: RawElement) -> FinalState:
+    """A final state; its entry and exit actions and its entry's `done(...)` (the done data)
+    are swarmgen's extension, as SCXML's `<final>` has them (docs/semantics.md)."""
+    _final_content(b, element)
+    opaque: list[OpaqueCode] = []
+    entry = actions_of(b, element.first("entry"), "entry action", opaque, "entry")
+    exit_ = actions_of(b, element.first("exit"), "exit action", opaque, "exit")
+    done = [a for a in entry if isinstance(a, expr.Done)]
+    if len(done) > 1:
+        b.diags.append(
+            dg.EFFECT_SYNTAX.at(
+                element.span,
+                what=f"entry action of final state '{element.name}'",
+                error="gives done(...) twice",
+                hint="give the done data once",
+            )
+        )
+    return FinalState(
+        id=element.id or element.span.path,
+        name=element.name,
+        entry=tuple(a for a in entry if not isinstance(a, expr.Done)),
+        exit=exit_,
+        donedata=done[0].args if done else (),
+        done_content=done[0].content if done else None,
+        span=element.span,
+    )
+
+
 def _final_content(b: Builder, element: RawElement) -> None:
-    """UML: a final state has no regions, no entry, exit or do behaviour, no submachine; the
-    emitters would drop them without a word."""
-    content = [f for f in ("region", "entry", "exit", "doActivity") if element.first(f) is not None]
+    """UML: a final state has no regions, no do behaviour, no submachine (entry and exit
+    actions are swarmgen's extension); the emitters would drop them without a word."""
+    content = [f for f in ("region", "doActivity") if element.first(f) is not None]
     content += ["submachine"] if element.ref_values("submachine") else []
     if content:
         b.diags.append(

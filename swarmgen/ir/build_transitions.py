@@ -36,6 +36,11 @@ class MachineContext:
     vertices: dict[str, RawElement] = field(default_factory=dict)
 
 
+# The error events the engine (and Qt SCXML) raise: a trigger of one of these names takes them
+# (`error` every one, by SCXML's prefix rule).
+ERROR_EVENTS = frozenset({"error", "error.execution", "error.communication"})
+
+
 def read_transition(b: Builder, element: RawElement, ctx: MachineContext) -> Transition | None:
     """The transition `element` of the machine in `ctx`, or None when an end is missing."""
     source = b.ref(element, "source")
@@ -171,6 +176,12 @@ def _named_trigger(
     )
     if event is not None:
         return Trigger(kind=TriggerKind.EVENT, name=event.name, event=event.id, span=element.span)
+    if name.removesuffix(".*") in ERROR_EVENTS:  # W3C's platform errors (docs/semantics.md)
+        return Trigger(kind=TriggerKind.ERROR, name=name.removesuffix(".*"), span=element.span)
+    done = name.removesuffix(".*")
+    if done in ("done", "done.state") or (done.startswith("done.state.") and len(done) > 11):
+        # another state's completion (its own is a triggerless transition): docs/semantics.md
+        return Trigger(kind=TriggerKind.DONE, name=done, span=element.span)
     if name in DEFAULT_OUTCOMES or behaviour is not None:
         return Trigger(kind=TriggerKind.OUTCOME, name=name, span=element.span)
     if not name:

@@ -13,7 +13,7 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from swarmgen import fastnode
-from swarmgen.expr import Action, Binding, Expr
+from swarmgen.expr import Action, Arg, Binding, Expr
 from swarmgen.span import Span
 
 Value = bool | int | float | str | None
@@ -236,11 +236,16 @@ class Pseudostate(Node):
 
 
 class FinalState(Node):
-    """A region's final state."""
+    """A region's final state; entry and exit actions and done data are swarmgen's extension
+    (SCXML's `<final>` has them: docs/semantics.md, "Final states and done data")."""
 
     type: Literal["final"] = "final"
     id: str
     name: str
+    entry: tuple[Action, ...] = ()
+    exit: tuple[Action, ...] = ()
+    donedata: tuple[Arg, ...] = ()  # the fields of the done.state event it raises
+    done_content: Expr | None = None  # or its whole data (`done(expr)`, W3C's <content>)
     span: Span
 
 
@@ -292,6 +297,8 @@ class TriggerKind(StrEnum):
     TIME = "time"  # `after` a delay
     CALL = "call"  # a UML CallEvent, named after its operation
     ANY = "any"
+    ERROR = "error"  # the platform's error events: error.execution, error.communication, error
+    DONE = "done"  # done.state.<state name>: a state other than the source completed
 
 
 class Trigger(Node):

@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from swarmgen.runtime.chart import Action, Node, Record, Transition, fields_filler
+from swarmgen.runtime.chart import Action, Node, Transition
 from swarmgen.runtime.microstep import (
     EntrySet,
     History,
@@ -25,6 +25,7 @@ from swarmgen.runtime.microstep import (
     recorded_history,
     remove_conflicts,
 )
+from swarmgen.runtime.values import Record, fields_filler
 
 # Bounds on what the tables keep (a stream of distinct event names, or a chart whose parallel
 # regions reach very many configurations, must not fill memory): past them a table starts over,

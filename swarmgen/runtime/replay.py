@@ -4,6 +4,7 @@ A scenario is a list of steps; each step is an input or a burst of inputs submit
     {"event": "targetFound", "data": {"target_id": 7}}             a swarm or station event
     {"complete": "TakeOff", "outcome": "succeeded", "outputs": {}}   the running behaviour ends
     {"burst": [step, step, ...]}                                     inputs queued back to back
+    {"wait": 250}                        that many ms pass (real time): timers, delayed raises
 A `complete` step ends the behaviour in the first active state (document order) that runs it;
 `"state": "<id>"` picks the state explicitly. After each step the trace records the active
 states (sorted) and the member data. The same rules are implemented for Qt SCXML in
@@ -36,6 +37,8 @@ def describe(step: Step) -> str:
         return " + ".join(describe(s) for s in expand(step))
     if "complete" in step:
         return f"{step['complete']} -> {step.get('outcome', 'succeeded')}"
+    if "wait" in step:
+        return f"wait {step['wait']} ms"
     return str(step.get("event", "?"))
 
 
@@ -92,7 +95,11 @@ async def replay_async(
     trace = [_record(0, None, member)]
     for number, step in enumerate(steps, start=1):
         for item in expand(step):
-            _submit(chart, member, library, item)
+            if "wait" in item:
+                await _settle(member)
+                await asyncio.sleep(float(item["wait"]) / 1000)
+            else:
+                _submit(chart, member, library, item)
         await _settle(member)
         trace.append(_record(number, step, member))
     member.stop()
@@ -139,7 +146,7 @@ def _record(number: int, step: Step | None, member: Member) -> dict[str, Any]:
         "input": describe(step) if step is not None else None,
         "active": member.active,
         "data": json.loads(json.dumps(member.engine.data, default=str)),
-        "errors": member.engine.error_count,  # error.execution so far (docs/semantics.md)
+        "errors": member.engine.error_count,  # error events so far (docs/semantics.md)
     }
 
 

@@ -28,10 +28,10 @@ from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, cast
 
-from swarmgen.runtime.chart import record
 from swarmgen.runtime.faults import Faults
 from swarmgen.runtime.host import Event
 from swarmgen.runtime.netoptions import Options
+from swarmgen.runtime.values import record
 
 if TYPE_CHECKING:
     from swarmgen.runtime.member import Member

@@ -18,84 +18,21 @@ from swarmgen.chart import model as c
 from swarmgen.chart.lower import lower
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.names import identifier
-from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX, STEP_BOUND
+from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX
+from swarmgen.scxml.support import (
+    DELAY_SCRIPT,
+    META_SCRIPT,
+    SPIN,
+    STEP_SCRIPT,
+    SUPPORT_SCRIPT,
+    TICK,
+)
 
 SCXML_NS = "http://www.w3.org/2005/07/scxml"
 SG_NS = "urn:swarmgen:scxml:1"
 _NSMAP = {None: SCXML_NS, "sg": SG_NS}
 _STATE_TAGS = ("state", "parallel", "final", "history")
 MAX_DEFAULT_LENGTH = 10_000
-# The support script every document carries (docs/scxml.md): what makes ECMAScript agree with
-# swarmgen's Python runtime. A zero divisor and a field the event does not carry are errors
-# (error.execution, the guard is false) instead of Infinity and `undefined`; `value` reads a
-# behaviour's output with the value rule (what is missing takes its zero, recursively).
-SUPPORT_SCRIPT = """
-var $sg = {
-  div: function (a, b) {
-    if (b == 0) { throw new RangeError("division by zero"); }
-    return a / b;
-  },
-  mod: function (a, b) {
-    if (b == 0) { throw new RangeError("modulo by zero"); }
-    return ((a % b) + b) % b;
-  },
-  field: function (e, f) {
-    var d = (e !== undefined && e !== null) ? e.data : undefined;
-    if (d === undefined || d === null || typeof d !== "object" ||
-        !Object.prototype.hasOwnProperty.call(d, f)) {
-      throw new TypeError("the event has no field " + f);
-    }
-    return d[f];
-  },
-  value: function (d, f, zero) {
-    var v = (d !== undefined && d !== null && typeof d === "object") ? d[f] : undefined;
-    return $sg.fill(v, zero);
-  },
-  fill: function (v, t) {
-    if (t === null || typeof t !== "object" || Array.isArray(t)) {
-      return (v === undefined || v === null) ? t : v;
-    }
-    var g = (v !== undefined && v !== null && typeof v === "object" &&
-             !Array.isArray(v)) ? v : {};
-    var r = {};
-    for (var f in t) { r[f] = $sg.fill(g[f], t[f]); }
-    return r;
-  }
-};
-"""
-# The step bound (docs/semantics.md), only in a document with bounded transitions (so others
-# keep their bytes). A bounded transition's cond ends with `$sg.spin()`: it counts, throws once
-# past the bound (Qt raises error.execution and the cond is false), then stays false until the
-# count restarts. Every cond of such a document starts with `$sg.tick(_event)`, which restarts
-# it at the first transition considered under a new input from outside, exactly where the
-# engine restarts it (`Engine._restart_count`); not under an event the document sent itself
-# (`<send target="#_internal">`, a `raise` with data: timers have a sendid, those have none).
-STEP_SCRIPT = f"""
-$sg.bound = {STEP_BOUND};
-$sg.steps = 0;
-$sg.hit = false;
-$sg.last = null;
-$sg.tick = function (e) {{
-  if (e !== undefined && e !== null && e.type === "external" && e !== $sg.last &&
-      !(e.origin === "#_internal" && !e.sendid)) {{
-    $sg.last = e;
-    $sg.steps = 0;
-    $sg.hit = false;
-  }}
-  return true;
-}};
-$sg.spin = function () {{
-  $sg.steps += 1;
-  if ($sg.steps <= $sg.bound) {{ return true; }}
-  if (!$sg.hit) {{
-    $sg.hit = true;
-    throw new RangeError("more than " + $sg.bound + " steps without an external event");
-  }}
-  return false;
-}};
-"""
-TICK = "$sg.tick(_event)"
-SPIN = "$sg.spin()"
 
 
 @dataclass(frozen=True)
@@ -129,7 +66,14 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
     bounded = any(t.bounded for n in chart.walk() for t in n.transitions)
     writer = _Writer({d.name: d.id for d in chart.data}, {d.id: d for d in chart.data}, bounded)
     writer.datamodel(scxml, chart.data)
-    _sub(scxml, "script").text = SUPPORT_SCRIPT + (STEP_SCRIPT if bounded else "")
+    delays = any(_computed_delay(a) for n in chart.walk() for a in c.flat(_actions_of(n)))
+    meta = any(_reads_event_fields(e) for n in chart.walk() for e in _expressions_of(n))
+    _sub(scxml, "script").text = (
+        SUPPORT_SCRIPT
+        + (STEP_SCRIPT if bounded else "")
+        + (DELAY_SCRIPT if delays else "")
+        + (META_SCRIPT if meta else "")
+    )
     for node in chart.children:
         writer.node(scxml, node)
     _metadata(scxml, chart)
@@ -231,6 +175,10 @@ class _Writer:
             return
         self.onentry(element, node)
         self.onexit(element, node)
+        if node.donedata:  # a final state's: the fields of its done.state event
+            self.params(_sub(element, "donedata"), node.donedata, "param")
+        elif node.donecontent is not None:  # or its whole data
+            _sub(_sub(element, "donedata"), "content", {"expr": self.js(node.donecontent)})
         if node.call is not None:
             self.finalize(element, node.id, node.call)
         for transition in node.transitions:
@@ -243,8 +191,8 @@ class _Writer:
     def onentry(self, element: etree._Element, node: c.Node) -> None:
         """The model's entry actions, then the behaviour and timers in a block of their own
         (an error in the model's actions ends only its block, never the timers)."""
-        if node.onentry:
-            self.actions(_sub(element, "onentry"), node.onentry)
+        for block in _blocks(node.onentry):
+            self.actions(_sub(element, "onentry"), block)
         if not (node.call or node.timers):
             return
         onentry = _sub(element, "onentry")
@@ -258,8 +206,8 @@ class _Writer:
             )
 
     def onexit(self, element: etree._Element, node: c.Node) -> None:
-        if node.onexit:
-            self.actions(_sub(element, "onexit"), node.onexit)
+        for block in _blocks(node.onexit):
+            self.actions(_sub(element, "onexit"), block)
         if node.timers:
             onexit = _sub(element, "onexit")
             for timer in node.timers:
@@ -330,6 +278,10 @@ class _Writer:
         for action in actions:
             if isinstance(action, c.Assign):
                 _sub(parent, "assign", {"location": action.location, "expr": self.js(action.value)})
+            elif isinstance(action, c.Raise) and (
+                action.delay is not None or action.target is not None
+            ):
+                self.params(self.delayed(parent, action, action.delay), action.params, "param")
             elif isinstance(action, c.Raise) and not action.params:
                 _sub(parent, "raise", {"event": action.event})
             elif isinstance(action, c.Raise):
@@ -341,8 +293,64 @@ class _Writer:
             elif isinstance(action, c.Send):
                 send = _sub(parent, _sg("send"), {"event": action.event, "scope": "swarm"})
                 self.params(send, action.params, _sg("param"))
+            elif isinstance(action, c.Cancel) and action.expr is not None:
+                _sub(parent, "cancel", {"sendidexpr": self.js(action.expr)})
+            elif isinstance(action, c.Cancel):
+                _sub(parent, "cancel", {"sendid": str(action.sendid)})
+            elif isinstance(action, c.Block):  # only at the top of entry/exit (the check)
+                self.actions(parent, action.actions)
+            elif isinstance(action, c.Log):
+                attrs = {"label": action.label} if action.label else {}
+                _sub(parent, "log", {**attrs, "expr": self.js(action.value)})
+            elif isinstance(action, c.If):
+                self.conditional(parent, action)
+            elif isinstance(action, c.ForEach):
+                attrs = {"array": self.js(action.array), "item": action.item}
+                if action.index is not None:
+                    attrs["index"] = action.index
+                self.actions(_sub(parent, "foreach", attrs), action.actions)
             else:
                 _sub(parent, _sg("opaque"), {"language": action.language}).text = action.text
+
+    def conditional(self, parent: etree._Element, action: c.If) -> None:
+        """`<if cond>` actions `<elseif cond/>` actions `<else/>` actions `</if>`."""
+        element: etree._Element | None = None
+        for cond, actions in action.branches:
+            if element is None:
+                element = _sub(
+                    parent, "if", {"cond": self.js(cond) if cond is not None else "true"}
+                )
+            elif cond is None:
+                _sub(element, "else")
+            else:
+                _sub(element, "elseif", {"cond": self.js(cond)})
+            self.actions(element, actions)
+
+    def delayed(
+        self, parent: etree._Element, action: c.Raise, delay: c.Delay | None
+    ) -> etree._Element:
+        """`raise e [to t] after ...`: a `<send>` (without target: the session's external
+        queue) with a literal `delay` when the delay is a constant, else a `delayexpr`."""
+        attrs = {"event": action.event}
+        target = action.target
+        if isinstance(target, expr.Const) and isinstance(target.value, str):
+            attrs["target"] = target.value
+        elif target is not None:
+            attrs["targetexpr"] = self.js(target)
+        if delay is None:
+            return _sub(parent, "send", attrs)
+        amount = delay.amount
+        literal = _literal_ms(delay)
+        if literal is not None:  # Qt SCXML reads a literal delay in whole units only
+            attrs["delay"] = f"{literal}ms"
+        elif delay.unit:
+            scale = "1000" if delay.unit == "s" else "1"
+            attrs["delayexpr"] = f"$sg.delay({self.js(amount)}, {scale})"
+        else:
+            attrs["delayexpr"] = f"$sg.duration({self.js(amount)})"
+        if action.sendid is not None:
+            attrs["id"] = action.sendid
+        return _sub(parent, "send", attrs)
 
     def params(self, send: etree._Element, params: tuple[c.Param, ...], tag: str) -> None:
         for param in params:
@@ -398,3 +406,78 @@ def _behaviour(library: etree._Element, behaviour: c.BehaviourInfo) -> None:
     for tag, params in (("input", behaviour.inputs), ("output", behaviour.outputs)):
         for name, type_ in params:
             _sub(element, _sg(tag), {"name": name, **({"type": type_} if type_ else {})})
+
+
+def _literal_ms(delay: c.Delay) -> int | None:
+    """A constant delay as whole milliseconds, else None (the support script computes it)."""
+    value = delay.amount.value if isinstance(delay.amount, expr.Const) else None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not delay.unit:
+        return None
+    ms = value * (1000 if delay.unit == "s" else 1)
+    return int(ms) if ms >= 0 and ms == int(ms) else None
+
+
+def _computed_delay(action: c.Action) -> bool:
+    """Whether the action is a delayed raise whose delay the support script computes."""
+    return (
+        isinstance(action, c.Raise)
+        and action.delay is not None
+        and _literal_ms(action.delay) is None
+    )
+
+
+def _actions_of(node: c.Node) -> tuple[c.Action, ...]:
+    """The actions of a node: entry, exit, its initial transition's and its transitions'."""
+    found = [*node.onentry, *node.onexit]
+    if node.initial is not None:
+        found += node.initial.actions
+    for transition in node.transitions:
+        found += transition.actions
+    return tuple(found)
+
+
+def _expressions_of(node: c.Node) -> list[expr.Expr]:
+    """Every expression of a node: conds, action values and conditions, call arguments."""
+    found = [t.cond for t in node.transitions if t.cond is not None]
+    for action in c.flat(_actions_of(node)):
+        if isinstance(action, c.Assign):
+            found.append(action.value)
+        elif isinstance(action, c.If):
+            found += [cond for cond, _ in action.branches if cond is not None]
+        elif isinstance(action, c.ForEach):
+            found.append(action.array)
+        elif isinstance(action, c.Log):
+            found.append(action.value)
+        elif isinstance(action, c.Raise | c.Send):
+            found += [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
+            if isinstance(action, c.Raise) and action.target is not None:
+                found.append(action.target)
+    if node.call is not None:
+        found += [a.value for a in node.call.args]
+    return found
+
+
+def _reads_event_fields(e: expr.Expr) -> bool:
+    """Whether the expression reads a field of `_event` (`$sg.meta` in the document)."""
+    return any(
+        isinstance(s, expr.Attr) and isinstance(s.obj, expr.System) and s.obj.name == "_event"
+        for s in expr.walk(e)
+    )
+
+
+def _blocks(actions: tuple[c.Action, ...]) -> list[tuple[c.Action, ...]]:
+    """Entry or exit actions as the `<onentry>`/`<onexit>` elements that hold them: the
+    actions between blocks in one, each `block ... end` in one of its own."""
+    found: list[tuple[c.Action, ...]] = []
+    pending: list[c.Action] = []
+    for action in actions:
+        if isinstance(action, c.Block):
+            if pending:
+                found.append(tuple(pending))
+                pending = []
+            found.append(action.actions)
+        else:
+            pending.append(action)
+    if pending:
+        found.append(tuple(pending))
+    return found

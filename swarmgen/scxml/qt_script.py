@@ -38,6 +38,17 @@ def _settle(app: object, rounds: int = 10) -> None:
         app.processEvents()  # type: ignore[attr-defined]
 
 
+def _wait(app: object, seconds: float) -> None:
+    """Let `seconds` of real time pass, processing Qt's events (its timers, delayed sends)."""
+    import time
+
+    _settle(app)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        app.processEvents()  # type: ignore[attr-defined]
+        time.sleep(min(0.002, max(0.0, end - time.monotonic())))
+
+
 SCXML = "{http://www.w3.org/2005/07/scxml}"
 SG = "{urn:swarmgen:scxml:1}"
 
@@ -115,6 +126,8 @@ def _describe(step: dict[str, Any]) -> str:
         return " + ".join(_describe(s) for s in _expand(step))
     if "complete" in step:
         return f"{step['complete']} -> {step.get('outcome', 'succeeded')}"
+    if "wait" in step:
+        return f"wait {step['wait']} ms"
     return str(step.get("event", "?"))
 
 
@@ -165,7 +178,10 @@ def _run(path: str, steps: list[dict[str, Any]], scenario: int | None = None) ->
         if isinstance(step, list):  # the older [event, data] form
             step = {"event": step[0], "data": step[1]}
         for item in _expand(step):
-            _submit(machine, item, document)
+            if "wait" in item:
+                _wait(app, float(item["wait"]) / 1000)
+            else:
+                _submit(machine, item, document)
         _settle(app)
         _report(machine, number, _describe(step), document.data, scenario)
     machine.stop()

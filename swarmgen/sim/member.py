@@ -62,6 +62,8 @@ class SimMember(Member):
         self.chart_name = chart_name
         self.live: dict[str, Activation] = {}  # state id -> its running behaviour
         self.timer_tokens: dict[str, int] = {}
+        self.delayed_tokens: dict[str, set[int]] = {}  # pending delayed raises by send id
+        self._delayed_count = 0
         super().__init__(
             chart, member_type, f"{member_type}-{index}", _NoLibrary(), bus, event_scopes=scopes
         )
@@ -97,3 +99,24 @@ class SimMember(Member):
     def cancel_timer(self, node: Node, event: str) -> None:
         """Cancel a pending timer."""
         self.timer_tokens.pop(event, None)
+
+    def start_delayed(self, key: str, event: Event, delay_ms: float) -> None:
+        """Deliver `event` after `delay_ms` (in ticks, at least one) unless cancelled by `key`."""
+        self._delayed_count += 1
+        token = self._delayed_count
+        self.delayed_tokens.setdefault(key, set()).add(token)
+        ticks = max(1, math.ceil(delay_ms / self.batch.scenario.timing["tick_ms"]))
+
+        def fire() -> None:
+            pending = self.delayed_tokens.get(key)
+            if pending is not None and token in pending:
+                pending.discard(token)
+                if not pending:
+                    del self.delayed_tokens[key]
+                self.deliver(event)
+
+        self.batch.at(self.rank, self.batch.t[self.rank] + ticks, fire)
+
+    def cancel_delayed(self, key: str) -> None:
+        """Cancel the pending delayed events of `key`."""
+        self.delayed_tokens.pop(key, None)

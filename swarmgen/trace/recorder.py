@@ -408,7 +408,7 @@ def _write_replay(
                 if item.get("state") is not None:
                     outputs.setdefault("state", item["state"])
                 recorder.record_event(name, outputs, "replay", stamp)
-            else:
+            elif "event" in item:  # a `wait` step is no input
                 recorder.record_event(str(item.get("event")), item.get("data"), "station", stamp)
         if number in records:
             recorder.record_states(

@@ -86,6 +86,8 @@ def _describe(system: System, step: Step, after: SwarmState) -> str:
         return f"{who}: the behaviour of {state} ends with '{step.event}'  -> {who}: {where}"
     if step.kind == "emit":
         return f"{who}: the behaviour of {state} sends {step.event}"
+    if step.kind == "delayed":
+        return f"{who}: the delayed {step.event} ({step.state}) arrives  -> {who}: {where}"
     return f"{who}: the timer {step.event} of {state} fires  -> {who}: {where}"
 
 

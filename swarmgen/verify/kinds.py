@@ -87,6 +87,8 @@ class MemberKind:
         else:
             if kind == "timer":
                 host.cancel_timer(self.chart.nodes[state_id], name)  # it fired
+            if kind == "delayed":
+                data = host.arrived(state_id, name)
             value = thaw(data)
             event = Event(name, value, 0, 0.0, "verify")
             replayed = {"event": name} if value is None else {"event": name, "data": value}

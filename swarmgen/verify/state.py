@@ -49,6 +49,8 @@ class EngineState:
     finished: bool
     calls: tuple[tuple[str, int], ...]  # (state id, events its behaviour emitted so far)
     timers: tuple[tuple[str, str], ...]  # (state id, timer event)
+    # pending `raise e after ...`: (send id key, event, its data), in the order raised
+    delayed: tuple[tuple[str, str, Frozen], ...] = ()
     activations: tuple[tuple[str, int], ...] = field(default=(), compare=False, repr=False)
     errors: int = field(default=0, compare=False, repr=False)
 
@@ -56,7 +58,7 @@ class EngineState:
         """The fields that make the value (activations and errors left out)."""
         return (
             self.config, self.data, self.history, self.running, self.finished, self.calls,
-            self.timers,
+            self.timers, self.delayed,
         )  # fmt: skip
 
 
@@ -69,6 +71,7 @@ class VerifyHost:
         self.timers: dict[str, set[str]] = {}
         self.sent: list[Event] = []
         self.own: list[Event] = []  # `raise e(f = ...)`: to this member's own queue
+        self.delayed: list[tuple[str, str, Frozen]] = []  # pending delayed raises
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
         """A behaviour starts: it runs until the verifier ends it."""
@@ -89,6 +92,22 @@ class VerifyHost:
             pending.discard(event)
             if not pending:
                 del self.timers[node.id]
+
+    def start_delayed(self, key: str, event: Event, delay_ms: float) -> None:
+        """A pending delayed raise: like a timer, it may arrive at any later step."""
+        self.delayed.append((key, event.name, freeze(event.data)))
+
+    def cancel_delayed(self, key: str) -> None:
+        """`cancel key`: its pending delayed raises never arrive."""
+        self.delayed = [pending for pending in self.delayed if pending[0] != key]
+
+    def arrived(self, key: str, name: str) -> Frozen:
+        """The first pending delayed raise of `key` and `name` arrives: its data."""
+        for number, (k, n, data) in enumerate(self.delayed):
+            if (k, n) == (key, name):
+                del self.delayed[number]
+                return data
+        return None
 
     def send_swarm(self, event: Event) -> None:
         """An event to the swarm: the system puts it in the receivers' inboxes."""
@@ -123,6 +142,7 @@ def capture(engine: Engine, host: VerifyHost) -> EngineState:
         finished=engine.finished,
         calls=tuple(sorted(host.calls.items())),
         timers=tuple(sorted((s, e) for s, events in host.timers.items() for e in events)),
+        delayed=tuple(host.delayed),
         activations=activations,
         errors=engine.error_count,
     )
@@ -150,5 +170,6 @@ def restore(engine: Engine, host: VerifyHost, state: EngineState) -> None:
     host.timers = {}
     for node_id, event in state.timers:
         host.timers.setdefault(node_id, set()).add(event)
+    host.delayed = list(state.delayed)
     host.sent = []
     host.own = []

@@ -14,7 +14,8 @@ nondeterministic choice:
   finite domains `domains` computes;
 - `emit`: a running behaviour sends one of the events its `emits` tag names (at most
   `emit_bound` times per activation);
-- `timer`: a pending timer fires.
+- `timer`: a pending timer fires;
+- `delayed`: a pending `raise e after ...` arrives (any time before it is cancelled).
 
 The swarm events a member sent go to the end of the inbox of every running member (the
 sender's too), `local` ones to the sender only. Every member value is kept in its normal form
@@ -69,7 +70,7 @@ class Step:
     """One step: its kind, the member (index in the state's order), the event or outcome, the
     state whose behaviour or timer it is and, for an outcome, the outputs."""
 
-    kind: str  # "station", "deliver", "outcome", "emit", "timer"
+    kind: str  # "station", "deliver", "outcome", "emit", "timer", "delayed" (state: its key)
     member: int = -1
     event: str = ""
     state: str = ""
@@ -222,6 +223,8 @@ class System:
                     Step("emit", -1, e, state_id) for e in kind.emits.get(call.behaviour, ())
                 )
         found.extend(Step("timer", -1, event, state_id) for state_id, event in engine.timers)
+        arriving = dict.fromkeys((key, name) for key, name, _ in engine.delayed)
+        found.extend(Step("delayed", -1, name, key) for key, name in arriving)
         return found
 
     def station_events(self, state: SwarmState) -> list[str]:

@@ -126,6 +126,7 @@ class MemberNode(GoalClient):
         self._queue: deque[SwarmEvent] = deque()
         self._draining = False
         self._model_timers: dict[str, Handle] = {}
+        self._delayed: dict[str, list[Handle]] = {}  # pending `raise e after ...` by send id
         if self.scheduler.lockstep is not None:
             self.scheduler.lockstep.quiet.append(lambda: not self._queue and not self._draining)
         self._create_endpoints()
@@ -220,6 +221,10 @@ class MemberNode(GoalClient):
         for handle in self._model_timers.values():
             handle.cancel()
         self._model_timers.clear()
+        for handles in self._delayed.values():
+            for handle in handles:
+                handle.cancel()
+        self._delayed.clear()
 
     def active(self) -> list[str]:
         """The active states (the engine's configuration)."""
@@ -335,6 +340,29 @@ class MemberNode(GoalClient):
         """Stop a model timer (the state that started it was left)."""
         handle = self._model_timers.pop(event, None)
         if handle is not None:
+            handle.cancel()
+
+    def start_delayed(self, key: str, event: SwarmEvent, delay_ms: float) -> None:
+        """`raise e after N ms`: deliver `event` after the delay (scaled), unless cancelled;
+        like model timers, not when timers are off (an isolated replay)."""
+        if not self.options.timers:
+            return
+        handles = self._delayed.setdefault(key, [])
+
+        def fire() -> None:
+            pending = self._delayed.get(key, [])
+            if handle in pending:
+                pending.remove(handle)
+            if not pending:
+                self._delayed.pop(key, None)
+            self.deliver(event)
+
+        handle = self.scheduler.call_later(delay_ms / 1000 * self.time_scale, fire)
+        handles.append(handle)
+
+    def cancel_delayed(self, key: str) -> None:
+        """Drop the pending delayed events of `key`."""
+        for handle in self._delayed.pop(key, ()):
             handle.cancel()
 
 

@@ -11,6 +11,7 @@ cancelled activations.
 from __future__ import annotations
 
 import itertools
+import logging
 import time
 from collections import deque
 from collections.abc import Callable, Mapping
@@ -22,8 +23,10 @@ from .chart import (
     OUTCOME_PREFIX,
     STEP_BOUND,
     Chart,
+    CommunicationError,
     Context,
     Node,
+    Record,
     StepBoundExceeded,
     Transition,
     record,
@@ -44,6 +47,7 @@ class Engine:
     member_id: str = ""
     clock: Callable[[], float] = time.time
     on_error: Callable[[str, BaseException], None] | None = None
+    on_log: Callable[[str, Any], None] | None = None  # `log label, value` (else `logging`)
 
     def __post_init__(self) -> None:
         self.data = self.chart.fresh_data()
@@ -56,6 +60,8 @@ class Engine:
         self._to_invoke: set[Node] = set()
         self._activation: dict[Node, int] = {}
         self._ids = itertools.count(1)
+        self._sends = 0  # delayed raises without a send id so far (their keys: `send.<n>`)
+        self.session_id = f"{self.chart.name}:{self.member_id}"  # `_sessionid`
         self._events = self.chart.events
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
@@ -153,6 +159,76 @@ class Engine:
     def send_swarm(self, name: str, data: Mapping[str, Any] | None) -> None:
         """`send e`: the event goes to the swarm, through the host."""
         self.host.send_swarm(self.make_event(name, data, self.member_id))
+
+    def raise_delayed(
+        self, name: str, data: Mapping[str, Any] | None, delay_ms: Any, sendid: str | None
+    ) -> None:
+        """`raise e after N ms [as id]`: the host delivers it to this member's external queue
+        after the delay (W3C: a delayed `<send>` to the session itself). It arrives as an input
+        from outside (the step bound restarts with it). A delay that is no number, or is
+        negative, is an error (error.execution): the event is not raised."""
+        if isinstance(delay_ms, bool) or not isinstance(delay_ms, int | float) or delay_ms < 0:
+            raise ValueError(f"the delay of {name!r} is {delay_ms!r}, not a duration")
+        if sendid is None:  # a key no `as <name>` can give (a name has no dot)
+            self._sends += 1
+            key = f"send.{self._sends}"
+        else:
+            key = sendid
+        event = self.make_event(name, data, self.member_id)
+        event.sendid = sendid or ""
+        self.host.start_delayed(key, event, delay_ms)
+
+    def system_variable(self, name: str, event: Event | None) -> Any:
+        """`_event` (its W3C fields, docs/semantics.md), `_sessionid`, `_name`, `_ioprocessors`."""
+        if name == "_sessionid":
+            return self.session_id
+        if name == "_name":
+            return self.chart.name
+        if name == "_ioprocessors":
+            where = Record(location=f"#_scxml_{self.session_id}")
+            return Record({PROCESSOR: where, "scxml": where})
+        if event is None:
+            raise NameError("_event is not bound before the first event")
+        return event_fields(event)
+
+    def log(self, label: str, value: Any) -> None:
+        """`log`: to `on_log` when the host set one, else to Python's `logging` (INFO, logger
+        `swarmgen.log.<chart>`); it changes no state and no trace."""
+        if self.on_log is not None:
+            self.on_log(label, value)
+        else:
+            logging.getLogger(f"swarmgen.log.{self.chart.name}").info("%s: %r", label, value)
+
+    def execution_error(self, where: str, err: BaseException) -> None:
+        """An expression of executable content failed where the block goes on (an `if`
+        condition): error.execution, counted and reported as every other."""
+        self._error(where, err)
+
+    def raise_targeted(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None,
+        target: Any,
+        delay_ms: Any,
+        sendid: str | None,
+    ) -> None:
+        """`raise e to target`: `#_internal` is `raise e` (delays are for sessions); this
+        session's `#_scxml_<_sessionid>` its external queue, as a delayed raise; another
+        session's is error.communication (swarmgen reaches no other session; as every error
+        of executable content it ends the block, W3C 4.9, as in Qt SCXML); anything else is
+        no target: error.execution, the block ends."""
+        if target == "#_internal" and not delay_ms:
+            self.raise_internal(name, data)
+        elif target == f"#_scxml_{self.session_id}":
+            self.raise_delayed(name, data, delay_ms, sendid)
+        elif isinstance(target, str) and target.startswith("#_scxml_"):
+            raise CommunicationError(f"no session {target[len('#_scxml_') :]!r} to send to")
+        else:
+            raise ValueError(f"{target!r} is not a target this member can send to")
+
+    def cancel_delayed(self, sendid: str) -> None:
+        """`cancel id`: the host drops the pending delayed events raised as `id`."""
+        self.host.cancel_delayed(sendid)
 
     # --- the algorithm
 
@@ -325,7 +401,8 @@ class Engine:
             self.finished = True
             self._exit_everything()
             return
-        self.internal.append(self.make_event(f"done.state.{parent.id}", kind="platform"))
+        data = self._done_data(state) if state.donedata is not None else None
+        self.internal.append(self.make_event(f"done.state.{parent.id}", data, kind="platform"))
         grandparent = parent.parent
         if (
             grandparent is not None
@@ -333,6 +410,16 @@ class Engine:
             and all(in_final(c, self.config) for c in grandparent.children if c.kind != "history")
         ):
             self.internal.append(self.make_event(f"done.state.{grandparent.id}", kind="platform"))
+
+    def _done_data(self, state: Node) -> Any:
+        """A final state's done data; one that fails raises error.execution (before the done
+        event) and the event carries none (W3C 5.5: `<donedata>`)."""
+        assert state.donedata is not None
+        try:
+            return state.donedata(self.ctx)
+        except Exception as err:
+            self._error(f"done data of {state.id}", err)
+            return None
 
     def _exit_everything(self) -> None:
         """The machine is done: behaviours are cancelled and exit actions run; the final
@@ -360,8 +447,35 @@ class Engine:
             return None
 
     def _error(self, where: str, err: BaseException) -> None:
-        self.error_count += 1
+        self.error_count += 1  # error events raised: execution and communication (as Qt)
         # no data, as in Qt SCXML: `where` and the error go to the host (`on_error`)
-        self.internal.append(self.make_event("error.execution", None, kind="platform"))
+        name = "error.communication" if isinstance(err, CommunicationError) else "error.execution"
+        self.internal.append(self.make_event(name, None, kind="platform"))
         if self.on_error is not None:
             self.on_error(where, err)
+
+
+PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"  # W3C's SCXML event I/O processor
+_TYPES = {"internal": "internal", "platform": "platform"}  # the rest is "external"
+
+
+def event_fields(event: Event) -> Record:
+    """`_event`'s W3C fields, with "" for a field W3C leaves blank and `{}` for no data: what
+    the SCXML document's `$sg.meta` makes of Qt SCXML's (docs/semantics.md). An event this
+    member sent itself (a raise with data, a delayed raise, a time event) has the origin
+    `#_internal` and the SCXML processor's type; only delayed raises with `as` and time
+    events (whose send id is their name) have a send id."""
+    name = event.name
+    timer = name.startswith("after.")
+    sendid = name if timer else (event.sendid or "")
+    sent = timer or event.sendid is not None or event.kind == "raised"
+    data: Any = event.data  # a Record, or any value a final state's done(expr) gave
+    return Record(
+        name=name,
+        type=_TYPES.get(event.kind, "external"),
+        sendid=sendid,
+        origin="#_internal" if sent else "",
+        origintype=PROCESSOR if sent else "",
+        invokeid="",
+        data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
+    )

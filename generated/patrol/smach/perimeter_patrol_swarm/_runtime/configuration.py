@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from .chart import Action, Node, Record, Transition, fields_filler
+from .chart import Action, Node, Transition
 from .microstep import (
     EntrySet,
     History,
@@ -26,6 +26,7 @@ from .microstep import (
     recorded_history,
     remove_conflicts,
 )
+from .values import Record, fields_filler
 
 # Bounds on what the tables keep (a stream of distinct event names, or a chart whose parallel
 # regions reach very many configurations, must not fill memory): past them a table starts over,

@@ -11,150 +11,50 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from .values import (
+    Filler,
+    Record,
+    defaults_maker,
+    duration_ms,
+    fields_filler,
+    fill,
+    fill_fields,
+    filler,
+    record,
+    zero_like,
+)
+
+# The value rule's helpers moved to `values`; they are still importable from here (the ROS
+# runtime and older generated packages import them from `chart`).
+__all__ = [
+    "CACHE_LIMIT",
+    "FINALIZE_PREFIX",
+    "OUTCOME_PREFIX",
+    "STEP_BOUND",
+    "Action",
+    "Call",
+    "Chart",
+    "ChartBuilder",
+    "CommunicationError",
+    "Cond",
+    "Context",
+    "Filler",
+    "Node",
+    "Record",
+    "StepBoundExceeded",
+    "Transition",
+    "defaults_maker",
+    "duration_ms",
+    "fields_filler",
+    "fill",
+    "fill_fields",
+    "filler",
+    "record",
+    "zero_like",
+]
+
 Cond = Callable[["Context"], bool]
 Action = Callable[["Context"], None]
-
-
-class Record(dict[str, Any]):
-    """Event and member data: a dict whose keys also read as attributes (`pose.x`), like the
-    SCXML ECMAScript datamodel."""
-
-    __slots__ = ()
-
-    def __getattr__(self, name: str) -> Any:
-        try:
-            return self[name]
-        except KeyError:
-            raise AttributeError(name) from None
-
-
-_PLAIN = frozenset({str, int, float, bool, type(None)})  # what `record` returns as it is
-
-
-def record(value: Any) -> Any:
-    """Deep-convert mappings to Records (lists are kept as lists of converted items)."""
-    if type(value) in _PLAIN:  # the common case, without the slow ABC checks below
-        return value
-    if isinstance(value, Mapping):
-        return Record({str(k): record(v) for k, v in value.items()})
-    if isinstance(value, list | tuple):
-        return [record(v) for v in value]
-    return value
-
-
-def zero_like(value: Any) -> Any:
-    """The zero of a value's type (every datum starts typed: docs/semantics.md, value rule)."""
-    if isinstance(value, bool):
-        return False
-    if isinstance(value, int):
-        return 0
-    if isinstance(value, float):
-        return 0.0
-    if isinstance(value, str):
-        return ""
-    if isinstance(value, Mapping):
-        return Record({str(k): zero_like(v) for k, v in value.items()})
-    if isinstance(value, list | tuple):
-        return []
-    return None
-
-
-def fill(value: Any, template: Any) -> Any:
-    """`value` as a value of `template`'s type (the value rule, docs/semantics.md): every field
-    the template has, what is missing (or null) taking the template's value, recursively; a
-    field the type does not have is dropped (a ROS message's `header.stamp` where the model's
-    type has none, a sender's extra key), so a datum holds exactly its type's fields."""
-    if type(template) in _PLAIN:
-        return template if value is None else record(value)
-    if isinstance(template, Mapping):
-        given = value if isinstance(value, Mapping) else {}
-        return Record({str(k): fill(given.get(k), default) for k, default in template.items()})
-    return record(template) if value is None else record(value)
-
-
-def fill_fields(data: Mapping[str, Any] | None, template: Mapping[str, Any]) -> Record:
-    """An event's data on arrival: each declared field as `fill` makes it; fields the event
-    does not declare are kept as they came (no expression can read them: the check)."""
-    data = data if isinstance(data, Mapping) else {}
-    filled = Record({str(k): record(v) for k, v in data.items()})
-    for key, default in template.items():
-        filled[key] = fill(data.get(key), default)
-    return filled
-
-
-Filler = Callable[[Any], Any]
-
-
-def filler(template: Any) -> Filler:
-    """`fill(value, template)` as a function of `value`, the template's walk done once (an
-    event's fields are filled on every arrival of the event)."""
-    if type(template) in _PLAIN:
-        return lambda value: template if value is None else record(value)
-    if not isinstance(template, Mapping):
-        return lambda value: record(template) if value is None else record(value)
-    parts = tuple((str(k), k, filler(default)) for k, default in template.items())
-    fresh = defaults_maker(template)
-
-    def fill_mapping(value: Any) -> Record:
-        if value is None:
-            return fresh()
-        given = value if isinstance(value, Mapping) else {}
-        return Record({key: part(given.get(k)) for key, k, part in parts})
-
-    return fill_mapping
-
-
-def defaults_maker(
-    template: Mapping[Any, Any], outer_key: Callable[[Any], Any] = str
-) -> Callable[[], Record]:
-    """A function making `fill(None, template)`: a new Record tree of the template's values.
-
-    Where every leaf is a plain value (the usual message type), it is one expression compiled
-    from the template's shape: it makes each Record of the tree with a single dict display,
-    instead of a call per field and level (an event's defaults are made on every arrival).
-    Only indices into `constants` appear in its text, never a key or a value of the model."""
-    constants: list[Any] = []
-
-    def text(value: Mapping[Any, Any], key_of: Callable[[Any], Any]) -> str | None:
-        items = []
-        for k, v in value.items():
-            constants.append(key_of(k))
-            key = f"C[{len(constants) - 1}]"
-            if type(v) in _PLAIN:
-                constants.append(v)
-                items.append(f"{key}: C[{len(constants) - 1}]")
-            elif isinstance(v, Mapping):
-                inner = text(v, str)
-                if inner is None:
-                    return None
-                items.append(f"{key}: {inner}")
-            else:
-                return None  # a list: made by `fill` itself
-        return "R({" + ", ".join(items) + "})"
-
-    expression = text(template, outer_key)
-    if expression is None:
-        return lambda: Record({outer_key(k): fill(None, v) for k, v in template.items()})
-    made: Callable[[], Record] = eval(
-        f"lambda: {expression}", {"__builtins__": {}, "R": Record, "C": tuple(constants)}
-    )
-    return made
-
-
-def fields_filler(template: Mapping[str, Any]) -> Callable[[Mapping[str, Any] | None], Record]:
-    """`fill_fields(data, template)` as a function of `data`, made once per event name."""
-    parts = tuple((key, filler(default)) for key, default in template.items())
-    fresh = defaults_maker(template, lambda key: key)  # `fill_fields` keeps the keys as they are
-
-    def fill_event(data: Mapping[str, Any] | None) -> Record:
-        if not isinstance(data, Mapping) or not data:
-            return fresh()
-        filled = Record({str(k): record(v) for k, v in data.items()})
-        for key, part in parts:
-            filled[key] = part(data.get(key))
-        return filled
-
-    return fill_event
 
 
 FINALIZE_PREFIX = "done.invoke."  # the host's word that a state's behaviour ended
@@ -168,6 +68,10 @@ STEP_BOUND = 1000
 # How many event names a node's lookup caches keep before they start over (events of names no
 # chart knows arrive from the swarm and from outside, and must not fill memory).
 CACHE_LIMIT = 1024
+
+
+class CommunicationError(RuntimeError):
+    """An event that cannot be dispatched (a send to another session): error.communication."""
 
 
 class StepBoundExceeded(RuntimeError):
@@ -202,6 +106,7 @@ class Node:
     onexit: Action | None = None
     call: Call | None = None
     timers: tuple[tuple[str, int], ...] = ()  # (event, delay in ms)
+    donedata: Callable[[Context], Any] | None = None  # a final state's done data
     order: int = 0  # document order
     depth: int = 0
     ancestors: tuple[Node, ...] = ()  # proper ancestors, innermost first (root included)
@@ -308,6 +213,10 @@ class Context:
         data = self.event.data if self.event is not None else None
         return data if isinstance(data, Record) else Record()
 
+    def system(self, name: str) -> Any:
+        """A system variable (`_event`, `_sessionid`, `_name`, `_ioprocessors`; W3C 5.10)."""
+        return self._engine.system_variable(name, self.event)
+
     def is_active(self, node_id: str) -> bool:
         """`In(state)`: whether the state is active."""
         return bool(self._engine.is_active(node_id))
@@ -319,6 +228,65 @@ class Context:
     def send(self, name: str, data: Mapping[str, Any] | None = None) -> None:
         """`send e`: an event to the swarm."""
         self._engine.send_swarm(name, data)
+
+    def raise_later(
+        self, name: str, data: Mapping[str, Any] | None, delay_ms: Any, sendid: str | None
+    ) -> None:
+        """`raise e after N ms [as id]`: an event to this member's external queue once the
+        delay is over, unless `cancel id` comes first."""
+        self._engine.raise_delayed(name, data, delay_ms, sendid)
+
+    @staticmethod
+    def each(value: Any) -> list[tuple[Any, int]]:
+        """`for item, index in value`: (item, index) of a copy of the sequence (W3C's
+        `<foreach>` iterates a shallow copy); anything else is an error (error.execution)."""
+        if not isinstance(value, list | tuple):
+            raise TypeError(f"'for' takes a sequence, not {value!r}")
+        return [(item, index) for index, item in enumerate(list(value))]
+
+    def holds(self, cond: Callable[[], Any]) -> bool:
+        """The condition of an `if`/`elif`: one that fails is false and raises error.execution
+        (W3C 5.9), and the actions after it go on."""
+        try:
+            return bool(cond())
+        except Exception as err:
+            self._engine.execution_error("condition of an if", err)
+            return False
+
+    def block(self, actions: Action) -> None:
+        """`block ... end`: its actions; an error ends only them (error.execution), as each
+        `<onentry>`/`<onexit>` element is a block of its own in SCXML."""
+        try:
+            actions(self)
+        except Exception as err:
+            self._engine.execution_error("block", err)
+
+    def log(self, label: str, value: Any) -> None:
+        """`log label, value`: to the member's log (the engine's `on_log`)."""
+        self._engine.log(label, value)
+
+    def raise_to(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None,
+        target: Any,
+        delay_ms: Any,
+        sendid: str | None,
+    ) -> None:
+        """`raise e to target [after ...]`: W3C's `<send target>` (Engine.raise_targeted)."""
+        self._engine.raise_targeted(name, data, target, delay_ms, sendid)
+
+    def cancel(self, sendid: Any) -> None:
+        """`cancel id` / `cancel (expr)`: the pending delayed events raised as that send id
+        never arrive; a computed id that is no string is an error (error.execution)."""
+        if not isinstance(sendid, str):
+            raise TypeError(f"a send id is a string, not {sendid!r}")
+        self._engine.cancel_delayed(sendid)
+
+    @staticmethod
+    def duration(value: Any) -> float:
+        """A duration string (`"1.5s"`, `"200ms"`, SCXML's delay syntax) in milliseconds."""
+        return duration_ms(value)
 
     def field(self, name: str) -> Any:
         """`event.<name>`: a field the current event does not carry is an error (SCXML's
@@ -363,8 +331,10 @@ class ChartBuilder:
         call: Call | None = None,
         timers: Sequence[tuple[str, int]] = (),
         history: str = "",
+        donedata: Callable[[Context], Any] | None = None,
     ) -> None:
-        """Declare a node under `parent` (None: the root), after its parent."""
+        """Declare a node under `parent` (None: the root), after its parent; a final state's
+        `donedata` gives the fields of the done.state event entering it raises."""
         if node_id in self._nodes or not node_id:
             raise ValueError(f"duplicate or empty node id {node_id!r}")
         owner = self._nodes[parent] if parent is not None else self._root
@@ -373,6 +343,7 @@ class ChartBuilder:
         )
         node.timers = tuple(timers)
         node.history = history
+        node.donedata = donedata
         owner.children.append(node)
         self._nodes[node_id] = node
         self._names[node_id] = name or node_id

@@ -6,7 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from .chart import Call, Node, Record
+from .chart import Call, Node
+from .values import Record
 
 __all__ = ["Event", "Host", "NullHost"]
 
@@ -24,6 +25,7 @@ class Event:
     # "external", "internal", "platform", or "raised": external, queued by this member's own
     # `raise e(f = ...)` (the step bound goes on counting through it)
     kind: str = "external"
+    sendid: str | None = None  # a delayed raise's send id ("" without `as`): `_event.sendid`
 
 
 class Host(Protocol):
@@ -41,6 +43,13 @@ class Host(Protocol):
     def cancel_timer(self, node: Node, event: str) -> None:
         """Cancel a timer of a state being exited."""
 
+    def start_delayed(self, key: str, event: Event, delay_ms: float) -> None:
+        """Deliver `event` as `deliver` does, after `delay_ms`, unless `cancel_delayed(key)`
+        comes first (`raise e after N ms as key`; several may share a key)."""
+
+    def cancel_delayed(self, key: str) -> None:
+        """Drop every pending delayed event of `key` (none pending: nothing happens)."""
+
     def send_swarm(self, event: Event) -> None:
         """Publish an event to the swarm."""
 
@@ -56,6 +65,7 @@ class NullHost:
         self.sent: list[Event] = []
         self.delivered: list[Event] = []  # events to itself (a `raise` with data)
         self.timers: dict[str, int] = {}
+        self.delayed: list[tuple[str, Event, float]] = []  # pending (key, event, delay in ms)
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
         """Record the call (state id, behaviour, arguments)."""
@@ -71,6 +81,14 @@ class NullHost:
     def cancel_timer(self, node: Node, event: str) -> None:
         """Forget the pending timer."""
         self.timers.pop(event, None)
+
+    def start_delayed(self, key: str, event: Event, delay_ms: float) -> None:
+        """Record the pending delayed event (submitted by hand, as timers are)."""
+        self.delayed.append((key, event, delay_ms))
+
+    def cancel_delayed(self, key: str) -> None:
+        """Forget the pending delayed events of `key`."""
+        self.delayed = [pending for pending in self.delayed if pending[0] != key]
 
     def send_swarm(self, event: Event) -> None:
         """Record the swarm event."""

@@ -29,10 +29,10 @@ from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, cast
 
-from .chart import record
 from .faults import Faults
 from .host import Event
 from .netoptions import Options
+from .values import record
 
 if TYPE_CHECKING:
     from .member import Member

@@ -17,8 +17,9 @@ from collections.abc import Awaitable, Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from .chart import Call, Chart, Node, record
+from .chart import Call, Chart, Node
 from .engine import FINALIZE_PREFIX, Engine, Event
+from .values import record
 
 CANCEL_GRACE = 1.0  # seconds a cancelled behaviour may take to end before it is abandoned
 DRAIN_BATCH = 256  # events processed between two yields to the event loop
@@ -160,6 +161,8 @@ class Member:
         # `_make_tasks`): state -> (call, behaviour, request, activation).
         self._starting: dict[Node, tuple[Call, Behaviour, Request, int]] = {}
         self.timers: dict[str, asyncio.TimerHandle] = {}
+        # pending `raise e after ...` by send id (several may share one)
+        self.delayed: dict[str, list[asyncio.TimerHandle]] = {}
         self.errors: list[str] = []
         self.faults: list[Fault] = []
         self.error_total = 0  # errors found, including those past MAX_KEPT_ERRORS
@@ -416,6 +419,26 @@ class Member:
         if handle is not None:
             handle.cancel()
 
+    def start_delayed(self, key: str, event: Event, delay_ms: float) -> None:
+        """Deliver `event` to this member after `delay_ms`, unless cancelled by `key`."""
+        handles = self.delayed.setdefault(key, [])
+
+        def fire() -> None:
+            pending = self.delayed.get(key)
+            if pending is not None and handle in pending:
+                pending.remove(handle)
+                if not pending:
+                    del self.delayed[key]
+            self.deliver(event)
+
+        handle = asyncio.get_running_loop().call_later(delay_ms / 1000, fire)
+        handles.append(handle)
+
+    def cancel_delayed(self, key: str) -> None:
+        """Cancel the pending delayed events of `key`."""
+        for handle in self.delayed.pop(key, ()):
+            handle.cancel()
+
     def send_swarm(self, event: Event) -> None:
         """Publish `event` on the bus, in its declared scope."""
         self._make_tasks()  # the bus may wake other members
@@ -435,6 +458,10 @@ class Member:
         for handle in self.timers.values():
             handle.cancel()
         self.timers.clear()
+        for handles in self.delayed.values():
+            for handle in handles:
+                handle.cancel()
+        self.delayed.clear()
         for node, task in self.tasks.items():
             if not task.done():
                 self._cancel(task, node, "when the member stopped")

@@ -180,8 +180,10 @@ class State:
         onexit: Action | None = None,
         timers: Sequence[tuple[str, int]] = (),
         behaviour: Behaviour | None = None,
+        donedata: Callable[[Context], Any] | None = None,
     ) -> None:
         self._outcomes = list(outcomes)
+        self.donedata = donedata  # a FinalState's: the fields of its done.state event
         self._input_keys = list(input_keys)
         self._output_keys = list(output_keys)
         self.onentry = onentry

@@ -242,6 +242,8 @@ class Replay:
 
     def _submit(self, step: Step, target: tuple[str, int, bytes | None] | None) -> None:
         member = self.member
+        if "wait" in step:  # time passes; model timers and delayed raises are off here
+            return
         if "complete" not in step:
             sent = self.driver.publish(str(step["event"]), step.get("data"))
             self.stats["events"] += 1

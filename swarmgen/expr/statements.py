@@ -1,0 +1,288 @@
+"""The statements of the expression language: actions (effects, entry and exit) on the
+expression parser (`parse`): assignments, `raise`/`send` (delays, targets, send ids), `cancel`,
+`if`/`elif`/`else`, `for`, `block`, `done`, `log` (docs/profile.md)."""
+
+from __future__ import annotations
+
+from swarmgen.expr.errors import error_at
+from swarmgen.expr.lex import Tok
+from swarmgen.expr.parse import _Parser, _show_tok
+from swarmgen.expr.tree import (
+    RESERVED,
+    Action,
+    Arg,
+    Assign,
+    Attr,
+    Block,
+    Branch,
+    Cancel,
+    Const,
+    Delay,
+    DelayUnit,
+    Done,
+    Expr,
+    ForEach,
+    If,
+    Log,
+    Name,
+    Raise,
+    Send,
+)
+
+_NOT_ACTION = (
+    "an action must be `name = expression`, `raise <event>(...)`, `send <event>(...)` or "
+    "`cancel <name>`"
+)
+_BRANCH_ENDS = frozenset({"elif", "else", "end"})
+
+
+class _StatementParser(_Parser):
+    """The expression parser with the statements of effects, entry and exit actions."""
+
+    @staticmethod
+    def is_word(text: str, tok: Tok) -> bool:
+        return tok.kind == "word" and tok.text == text
+
+    def action(self) -> Action:
+        tok = self.peek()
+        # `send = 1` assigns member data named `send`
+        if (
+            tok.kind == "word"
+            and tok.text in ("raise", "send", "cancel", "if", "for", "done", "log", "block")
+            and not self.is_op("=", self.peek(1))
+        ):
+            if tok.text == "block":
+                opening = self.advance()
+                self.enter(opening)
+                actions = self.block(opening)
+                closing = self.advance()
+                if closing.text != "end":
+                    self.fail(
+                        closing, f"'{closing.text}' in a block", hint="a block ends with 'end'"
+                    )
+                self.nest -= 1
+                return Block(actions=actions)
+            if tok.text == "log":
+                return self.log()
+            if tok.text == "done":
+                self.advance()
+                if not self.is_op("(", self.peek()):
+                    self.fail(self.peek(), "`done` needs its fields: done(f = expr, ...)")
+                named = self.peek(1).kind == "word" and self.is_op("=", self.peek(2))
+                if named or self.is_op(")", self.peek(1)):
+                    return Done(args=self.arguments())
+                opening = self.advance()  # `done(expr)`: the data is the value itself
+                content, _ = self.expr(0)
+                self.close(opening)
+                return Done(content=content)
+            if tok.text == "if":
+                return self.conditional()
+            if tok.text == "for":
+                return self.loop()
+            return self.cancel() if tok.text == "cancel" else self.event_action()
+        target, value = self.assignment(_NOT_ACTION)
+        return Assign(target=target, value=value)
+
+    def conditional(self) -> If:
+        """`if c then ... elif c then ... else ... end` (statements as anywhere else)."""
+        opening = self.advance()
+        self.enter(opening)
+        branches: list[Branch] = []
+        keyword = opening
+        while True:
+            cond: Expr | None = None
+            if keyword.text != "else":
+                cond, _ = self.expr(0)
+                if not self.is_word("then", self.peek()):
+                    self.fail(
+                        self.peek(), f"expected 'then' after the condition of '{keyword.text}'"
+                    )
+                self.advance()
+            branches.append(Branch(cond=cond, actions=self.block(opening)))
+            keyword = self.advance()  # elif, else or end: `block` stopped at one
+            if keyword.text == "end":
+                break
+            if branches[-1].cond is None:
+                self.fail(
+                    keyword, f"'{keyword.text}' after 'else'", hint="`else` is the last branch"
+                )
+        self.nest -= 1
+        return If(branches=tuple(branches))
+
+    def log(self) -> Log:
+        """`log expr` or `log "label", expr`."""
+        self.advance()
+        first, _ = self.expr(0)
+        if not self.is_op(",", self.peek()):
+            return Log(value=first)
+        comma = self.advance()
+        if not (isinstance(first, Const) and isinstance(first.value, str)):
+            self.fail(comma, 'a log\'s label is a string: log "label", expr')
+        value, _ = self.expr(0)
+        return Log(label=first.value, value=value)
+
+    def loop(self) -> ForEach:
+        """`for item[, index] in array do ... end`."""
+        opening = self.advance()
+        self.enter(opening)
+        names: list[str] = []
+        while True:
+            tok = self.peek()
+            if tok.kind != "word" or tok.text in RESERVED or tok.text in ("in", "do"):
+                self.fail(tok, "expected the member data that takes each item after 'for'")
+            names.append(self.advance().text)
+            if len(names) == 2 or not self.is_op(",", self.peek()):
+                break
+            self.advance()
+        if not self.is_word("in", self.peek()):
+            self.fail(
+                self.peek(),
+                "expected 'in' after the loop's data",
+                hint="`for x, i in xs do ... end`",
+            )
+        self.advance()
+        at = self.peek()
+        array, _ = self.expr(0)
+        root = array
+        while isinstance(root, Attr):
+            root = root.obj
+        if not isinstance(root, Name):
+            self.fail(
+                at,
+                "'for' iterates member data (`for x in xs`), not an expression",
+                hint="assign the sequence to member data first (Qt SCXML reads <foreach array> only as a location)",
+            )
+        if not self.is_word("do", self.peek()):
+            self.fail(self.peek(), "expected 'do' after the sequence of 'for'")
+        self.advance()
+        actions = self.block(opening)
+        closing = self.advance()
+        if closing.text != "end":
+            self.fail(closing, f"'{closing.text}' in a 'for' loop", hint="a loop ends with 'end'")
+        self.nest -= 1
+        index = names[1] if len(names) == 2 else None
+        return ForEach(array=array, item=names[0], index=index, actions=actions)
+
+    def block(self, opening: Tok) -> tuple[Action, ...]:
+        """The statements of a branch, up to its `elif`, `else` or `end`."""
+        found: list[Action] = []
+        while True:
+            while self.peek().kind == "nl" or self.is_op(";", self.peek()):
+                self.advance()
+            tok = self.peek()
+            if tok.kind == "eof":
+                where = error_at(self.text, opening.offset, "")
+                self.fail(
+                    tok,
+                    "missing 'end'",
+                    hint=f"the 'if' at line {where.line + 1}, column {where.col + 1} is never closed",
+                )
+            if (
+                tok.kind == "word"
+                and tok.text in _BRANCH_ENDS
+                and not self.is_op("=", self.peek(1))
+            ):
+                return tuple(found)
+            found.append(self.action())
+            after = self.peek()
+            if not self.at_end_of_statement() and not (
+                after.kind == "word" and after.text in _BRANCH_ENDS
+            ):
+                self.unexpected(self.peek())
+
+    def cancel(self) -> Cancel:
+        self.advance()
+        name = self.peek()
+        if self.is_op("(", name):  # `cancel (expr)`: the send id computed
+            opening = self.advance()
+            computed, _ = self.expr(0)
+            self.close(opening)
+            return Cancel(expr=computed)
+        if name.kind != "word" or name.text in RESERVED:
+            self.fail(
+                name,
+                "expected the send id after 'cancel'",
+                hint="`raise e after 1 s as t` then `cancel t`",
+            )
+        self.advance()
+        return Cancel(sendid=name.text)
+
+    def event_action(self) -> Raise | Send:
+        verb = self.advance()
+        name = self.peek()
+        if name.kind != "word":
+            self.fail(name, f"expected an event name after '{verb.text}'")
+        self.advance()
+        args = self.arguments() if self.is_op("(", self.peek()) else ()
+        target = None
+        if self.is_word("to", self.peek()) and verb.text == "raise":
+            self.advance()
+            target, _ = self.expr(0)
+        after = self.peek()
+        if not self.is_word("after", after):
+            if verb.text == "raise":
+                return Raise(event=name.text, args=args, target=target)
+            return Send(event=name.text, args=args)
+        if verb.text != "raise":
+            self.fail(
+                after,
+                "only `raise` can be delayed",
+                hint="delay a `raise` to this member, and `send` from the transition it takes",
+            )
+        self.advance()
+        delay = self.delay()
+        sendid = None
+        if self.is_word("as", self.peek()):
+            self.advance()
+            tok = self.peek()
+            if tok.kind != "word" or tok.text in RESERVED:
+                self.fail(tok, "expected a send id after 'as'", hint="`raise e after 1 s as t`")
+            self.advance()
+            sendid = tok.text
+        return Raise(event=name.text, args=args, delay=delay, sendid=sendid, target=target)
+
+    def delay(self) -> Delay:
+        """`after <amount> ms|s`, or `after <amount>` with a duration string's value."""
+        amount, _ = self.expr(0)
+        unit: DelayUnit = ""
+        tok = self.peek()
+        if tok.kind == "word" and tok.text in ("ms", "s"):
+            self.advance()
+            unit = "ms" if tok.text == "ms" else "s"
+        return Delay(amount=amount, unit=unit)
+
+    def arguments(self) -> tuple[Arg, ...]:
+        opening = self.advance()
+        args: list[Arg] = []
+        while not self.is_op(")", self.peek()):
+            args.append(self.argument({a.name for a in args}))
+            if not self.is_op(",", self.peek()):
+                break
+            self.advance()
+        self.close(opening)
+        return tuple(args)
+
+    def argument(self, seen: set[str]) -> Arg:
+        name = self.peek()
+        if name.kind != "word":
+            self.fail(name, f"expected an argument `name = expression`, found {_show_tok(name)}")
+        if name.text in seen:
+            self.fail(name, f"duplicate argument '{name.text}'")
+        self.advance()
+        if not self.is_op("=", self.peek()):
+            self.fail(
+                self.peek(),
+                f"expected '=' after argument name '{name.text}'",
+                hint="event arguments are written `field = expression`",
+            )
+        self.advance()
+        value, _ = self.expr(0)
+        return Arg(name=name.text, value=value)
+
+
+def parse_actions(text: str) -> tuple[Action, ...]:
+    """Parse an effect (or entry/exit action): statements separated by newlines or `;`."""
+    parser = _StatementParser(text, statements=True)
+    actions: list[Action] = []
+    parser.statements_of(lambda: actions.append(parser.action()))
+    return tuple(actions)
