@@ -138,6 +138,10 @@ class System:
         self._moves: dict[tuple[Any, ...], Move] = {}
         self._steps: dict[int, tuple[Step, ...]] = {}
         self._appends: dict[tuple[int, Message], tuple[int, tuple[Message, ...]]] = {}
+        # the events a member may send (every swarm-scoped event its type knows)
+        self.member_events = sorted(
+            {name for k in self.kinds for name, scope in k.scopes.items() if scope != "local"}
+        )
         self.reducer = Reducer(self)
         self.ample_memo: dict[int, bool] = {}  # member value -> its steps are persistent
         self.local_memo: dict[int, Any] = {}  # member value -> its own graph (`decouple`)
@@ -153,6 +157,19 @@ class System:
             self.values.append(member)
             self.value_type.append(kind)
         return known
+
+    def hears(self, value: int) -> bool:
+        """Whether a running member value with an empty inbox could still take some event a
+        member may send (some state it can still reach has a transition on it: `decouple`)."""
+        kind = self.value_type[value]
+        config = self.values[value].engine.config
+        return any(self.reducer.live(kind, config, name) for name in self.member_events)
+
+    def weight(self, state: SwarmState) -> int:
+        """The events in flight in `state` (every inbox's length): ample steps never raise it
+        (the cycle proviso, `explore`)."""
+        values = self.values
+        return sum(len(values[v].inbox) for v in state.members)
 
     def member(self, state: SwarmState, index: int) -> MemberState:
         """The value of the member at `index` of `state`."""
