@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from swarmgen.verify.ample import ample
 from swarmgen.verify.decouple import decoupled
-from swarmgen.verify.system import Effect, Step, SwarmState, System, canonical
+from swarmgen.verify.system import Effect, Step, SwarmState, System, canonical_state
 
 if TYPE_CHECKING:
     from swarmgen.verify.observe import Observer
@@ -244,7 +244,7 @@ def _observe(system: System, search: Search, number: int, state: SwarmState) -> 
 
 
 def _key(system: System, state: SwarmState, budget: Budget) -> SwarmState:
-    return canonical(system, state)[0] if budget.symmetry else state
+    return canonical_state(system, state) if budget.symmetry else state
 
 
 def _line(search: Search, frontier: int, depth: int) -> str:
