@@ -46,7 +46,8 @@ if TYPE_CHECKING:
 )  # fmt: skip
 @click.option(
     "--counterexample", "directory", type=PATH,
-    help="Write each violation's replay scenarios into DIR/<code>/<member>.json.",
+    help="Write each violation's replay scenarios into DIR/<code>/<member>.json and its "
+    "trace as a ROS 2 bag, DIR/<code>/bag.",
 )  # fmt: skip
 @click.option("--quiet", is_flag=True, help="No progress line on stderr.")
 @FORMAT
