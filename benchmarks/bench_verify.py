@@ -1,14 +1,17 @@
 """`swarmgen verify` on the SAR sample: states explored and time, with and without symmetry
-reduction and partial-order reduction, for growing compositions.
+reduction and partial-order reduction, for growing compositions; and the symmetry factor on a
+swarm of identical members (`takeoff`: the test suite's take-off model, N UAVs that take off,
+may abort and retry, and land on the abort), where it grows like N!.
 
-Each configuration runs in a process of its own (`--one`), so the peak resident set of each is
-its own: `swarmgen verify sample_models/sar/sar.xmi --members UAV=a,UGV=b [--no-symmetry]
-[--no-por]` as a library call, the sample's own property included. A configuration that does not
-finish within `--max-states` states is recorded as bounded with how far it got.
+Each configuration runs in a process of its own (`--one`), so the peak resident set and the
+whole-process time of each are its own: `swarmgen verify MODEL --members UAV=a,UGV=b
+[--no-symmetry] [--no-por] --max-states N`, the sample's own property included. A configuration
+that does not finish within its budget of states is recorded as bounded with how far it got.
 
-    .venv/bin/python benchmarks/bench_verify.py [--max-states 400000]
+    .venv/bin/python benchmarks/bench_verify.py [--max-states 1500000] [--quick]
 
-Writes benchmarks/results/verify.json. The machine is shared: the load average is recorded.
+Writes benchmarks/results/verify.json (`--quick` leaves out the runs bounded by the budget and
+writes nothing). The machine is shared: the load average is recorded.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import platform
 import resource
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -27,32 +31,48 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-MODEL = ROOT / "sample_models" / "sar" / "sar.xmi"
+SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 RESULTS = ROOT / "benchmarks" / "results" / "verify.json"
-# (UAVs, UGVs, symmetry, partial-order reduction)
+# (model, UAVs, UGVs, symmetry, partial-order reduction, bounded by the budget)
 CONFIGS = [
-    (1, 1, True, True), (1, 1, False, True), (1, 1, True, False),
-    (2, 1, True, True), (2, 1, False, True), (2, 1, True, False),
-    (2, 2, True, True),
+    ("sar", 1, 1, True, True, False),
+    ("sar", 2, 1, True, True, False), ("sar", 2, 1, False, True, False),
+    ("sar", 2, 2, True, True, False), ("sar", 2, 2, False, True, False),
+    ("sar", 2, 2, True, False, False),
+    ("sar", 2, 0, True, True, False), ("sar", 2, 0, False, True, False),
+    ("sar", 3, 0, True, True, False), ("sar", 3, 0, False, True, False),
+    ("sar", 3, 3, True, True, False),
+    ("sar", 3, 3, False, True, True),
+    ("sar", 4, 4, True, True, True),
+    *(("takeoff", n, 0, sym, True, False) for n in (3, 4, 5, 6) for sym in (True, False)),
 ]  # fmt: skip
 
 
-def one(uavs: int, ugvs: int, symmetry: bool, por: bool, max_states: int) -> dict[str, Any]:
+def takeoff_model(directory: Path) -> Path:
+    """The test suite's swarm of identical take-off UAVs (`tests.test_verify.take_off`)."""
+    from tests.test_verify import take_off
+
+    return take_off(directory)
+
+
+def one(
+    model: Path, uavs: int, ugvs: int, symmetry: bool, por: bool, max_states: int
+) -> dict[str, Any]:
     """One verification in this process: its verdict, size and cost."""
     from swarmgen.verify import run
     from swarmgen.verify.explore import Budget
 
     started = time.perf_counter()
-    result = run.verify(
-        MODEL, Budget(max_states=max_states, symmetry=symmetry, por=por), {"UAV": uavs, "UGV": ugvs}
-    )
+    members = {"UAV": uavs, "UGV": ugvs} if model == SAR else {"UAV": uavs}
+    result = run.verify(model, Budget(max_states=max_states, symmetry=symmetry, por=por), members)
     seconds = time.perf_counter() - started
     search = result.search
     assert search is not None
     return {
-        "members": {"UAV": uavs, "UGV": ugvs},
+        "members": members,
         "symmetry": symmetry,
         "por": por,
+        "max_states": max_states,
         "verdict": run.summary(result).split(":", 1)[0],
         "states": search.states,
         "depth": search.max_depth,
@@ -68,21 +88,31 @@ def one(uavs: int, ugvs: int, symmetry: bool, por: bool, max_states: int) -> dic
 def main() -> None:
     """Run every configuration in a child process and write the results."""
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--max-states", type=int, default=400_000)
-    parser.add_argument("--one", nargs=4, type=int, metavar=("UAVS", "UGVS", "SYM", "POR"))
+    parser.add_argument("--max-states", type=int, default=1_500_000)
+    parser.add_argument("--quick", action="store_true", help="leave out the bounded runs")
+    parser.add_argument("--one", nargs=6, metavar=("MODEL", "UAVS", "UGVS", "SYM", "POR", "N"))
     args = parser.parse_args()
     if args.one:
-        uavs, ugvs, sym, por = args.one
-        print(json.dumps(one(uavs, ugvs, bool(sym), bool(por), args.max_states)))
+        model, uavs, ugvs, sym, por, budget = args.one
+        row = one(Path(model), int(uavs), int(ugvs), sym == "1", por == "1", int(budget))
+        print(json.dumps(row))
         return
     rows = []
-    for uavs, ugvs, sym, por in CONFIGS:
-        command = [sys.executable, __file__, "--max-states", str(args.max_states), "--one"]
-        command += [str(uavs), str(ugvs), str(int(sym)), str(int(por))]
-        done = subprocess.run(command, check=True, capture_output=True, text=True)
-        row = json.loads(done.stdout)
-        rows.append(row)
-        print(json.dumps(row), flush=True)
+    with tempfile.TemporaryDirectory() as scratch:
+        models = {"sar": SAR, "takeoff": takeoff_model(Path(scratch))}
+        for name, uavs, ugvs, sym, por, bounded in CONFIGS:
+            if bounded and args.quick:
+                continue
+            command = [sys.executable, __file__, "--one", str(models[name]), str(uavs)]
+            command += [str(ugvs), str(int(sym)), str(int(por)), str(args.max_states)]
+            started = time.perf_counter()
+            done = subprocess.run(command, check=True, capture_output=True, text=True)
+            row = {"model": name, **json.loads(done.stdout)}
+            row["process_seconds"] = round(time.perf_counter() - started, 2)
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+    if args.quick:
+        return
     payload = {
         "command": "benchmarks/bench_verify.py --max-states " + str(args.max_states),
         "python": platform.python_version(),

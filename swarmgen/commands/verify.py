@@ -46,7 +46,8 @@ if TYPE_CHECKING:
 )  # fmt: skip
 @click.option(
     "--counterexample", "directory", type=PATH,
-    help="Write each violation's replay scenarios into DIR/<code>/<member>.json.",
+    help="Write each violation's replay scenarios into DIR/<code>/<member>.json and its "
+    "trace as a ROS 2 bag, DIR/<code>/bag.",
 )  # fmt: skip
 @click.option("--quiet", is_flag=True, help="No progress line on stderr.")
 @FORMAT
@@ -134,15 +135,23 @@ def _json(result: Result) -> str:
 
 
 def _write(result: Result, directory: Path) -> None:
+    """Per counterexample, `DIR/<code>/`: each member's replay scenario and the trace as a
+    bag (`bag/`, a rosbag2 directory); a second counterexample with the same code goes to `<code>-2`, etc."""
+    from swarmgen.verify.bag import BAG_NAME, write_bag
     from swarmgen.verify.counterexample import write_scenarios
 
     system = result.loaded.system
+    used: dict[str, int] = {}
     for finding in result.findings:
         if finding.trace is None or system is None:
             continue
         code = finding.diagnostic.code.id
-        written = write_scenarios(
-            system, finding.trace, directory / code, finding.diagnostic.message
+        used[code] = used.get(code, 0) + 1
+        where = directory / (code if used[code] == 1 else f"{code}-{used[code]}")
+        written = write_scenarios(system, finding.trace, where, finding.diagnostic.message)
+        write_bag(finding.trace, where / BAG_NAME)
+        shown = console.shown(where)
+        click.echo(
+            f"swarmgen: wrote {len(written)} replay scenario(s) and {BAG_NAME} into {shown}",
+            err=True,
         )
-        shown = console.shown(directory / code)
-        click.echo(f"swarmgen: wrote {len(written)} replay scenario(s) into {shown}", err=True)

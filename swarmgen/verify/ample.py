@@ -19,8 +19,8 @@ path, is independent of every step in it) when:
   active states and data the property reads, `Observer.projection`).
 
 A persistent set with these conditions preserves deadlocks (SG401) and, with the cycle proviso
-the search adds (a reduced state whose ample successors include an already visited state is
-expanded in full: every cycle of the reduced graph then has a fully expanded state), the
+the search adds (`explore._may_close_cycle`: every cycle of the reduced graph but a retried
+step's self-loop has a fully expanded state), the
 stutter-invariant properties over the visible propositions: the user properties, the states
 entered (SG403, each member's own steps are all kept, only their interleaving with other
 members' steps is pruned) and the events received (SG404).

@@ -33,6 +33,9 @@ class Trace:
     scenarios: dict[str, list[dict[str, Any]]] = field(default_factory=dict)
     length: int = 0
     loop: int | None = None  # a lasso: the steps from this one on repeat for ever
+    # for the bag (`verify.bag`): (step, event, data, sender) and (step, member, active states)
+    events: list[tuple[int, str, Any, str]] = field(default_factory=list)
+    states: list[tuple[int, str, tuple[str, ...]]] = field(default_factory=list)
 
 
 def rerun(
@@ -43,6 +46,7 @@ def rerun(
     state = system.initial()
     trace = Trace([], state, {member_id: [] for member_id in system.ids}, len(steps) + len(tail))
     order: list[int] = []
+    trace.states = [(0, m, _active(system, state, i)) for i, m in enumerate(system.ids)]
     for number, step in enumerate([*steps, *(s for _, s in tail)], start=1):
         if number == len(steps) + 1:  # the tail's positions: the order of the state reached
             order = canonical(system, state)[1] if symmetry else list(range(len(state.members)))
@@ -50,7 +54,12 @@ def rerun(
             step = replace(step, member=order[tail[number - len(steps) - 1][0]])
         elif step.member >= 0 and symmetry:
             step = replace(step, member=canonical(system, state)[1][step.member])
+        trace.events.extend((number, *sent) for sent in _sent(system, state, step))
         state, effect = system.apply(state, step)
+        if step.member >= 0:
+            trace.states.append(
+                (number, system.ids[step.member], _active(system, state, step.member))
+            )
         if effect.replay is not None:
             trace.scenarios[system.ids[effect.member]].append(dict(effect.replay))
         trace.lines.append(f"{number:4d}  {_describe(system, step, state)}")
@@ -62,6 +71,31 @@ def rerun(
             trace.lines.append(f"        {system.ids[index]} ignores {message.name}")
     trace.final = state
     return trace
+
+
+def _sent(system: System, state: SwarmState, step: Step) -> list[tuple[str, Any, str]]:
+    """What a step puts on the swarm's record: the station's event, a behaviour's end (as
+    replay bags name it, `<Behaviour>.<outcome>` with its outputs), a timer, the events the
+    member sends (each with its data, sent by the member)."""
+    if step.kind == "station":
+        return [(step.event, None, "station")]
+    who = system.ids[step.member]
+    found: list[tuple[str, Any, str]] = []
+    if step.kind == "outcome":
+        call = system.kinds[system.types[step.member]].chart.nodes[step.state].call
+        behaviour = call.behaviour if call is not None else step.state
+        found.append(
+            (f"{behaviour}.{step.event}", {**(thaw(step.data) or {}), "state": step.state}, who)
+        )
+    elif step.kind == "timer":
+        found.append((step.event, None, who))
+    move = system.move(state.members[step.member], step)
+    found.extend((m.name, thaw(m.data), who) for m in move.posts)
+    return found
+
+
+def _active(system: System, state: SwarmState, index: int) -> tuple[str, ...]:
+    return tuple(sorted(system.engine(state, index).config))
 
 
 def active_names(system: System, state: SwarmState, index: int) -> list[str]:

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING
 
 from swarmgen.verify.ample import ample
 from swarmgen.verify.decouple import decoupled
-from swarmgen.verify.system import Effect, Step, SwarmState, System, canonical
+from swarmgen.verify.system import Effect, Step, SwarmState, System, canonical_state
 
 if TYPE_CHECKING:
     from swarmgen.verify.observe import Observer
@@ -46,6 +46,7 @@ class Search:
     parent: list[int] = field(default_factory=list)
     step: list[Step | None] = field(default_factory=list)
     depth: list[int] = field(default_factory=list)
+    weight: list[int] = field(default_factory=list)  # events in flight (`System.weight`)
     expanded: int = 0
     reduced: int = 0  # states expanded by an ample set only (`ample`)
     bounded: bool = False  # the budget stopped it: states were left unexplored
@@ -108,6 +109,7 @@ def explore(
     search.parent.append(-1)
     search.step.append(None)
     search.depth.append(0)
+    search.weight.append(system.weight(first))
     frontier: deque[tuple[int, SwarmState]] = deque([(0, first)])
     visible = observer.projection if observer is not None else None
     level = 0
@@ -132,11 +134,9 @@ def explore(
             continue
         steps = system.steps(state)
         reduced = ample(system, state, visible) if budget.por else None
-        old = search.states
         taken = reduced or steps
         successors = _expand(system, search, frontier, number, state, budget, taken, observer)
-        if reduced is not None and any(n < old for n, _ in successors):
-            # the cycle proviso: an ample successor already visited -> expand in full
+        if reduced is not None and _may_close_cycle(search, number, successors):
             rest = [s for s in steps if s not in reduced]
             successors += _expand(system, search, frontier, number, state, budget, rest, observer)
             taken, reduced = reduced + rest, None
@@ -183,11 +183,30 @@ def _expand(
             search.parent.append(number)
             search.step.append(step)
             search.depth.append(search.depth[number] + 1)
+            search.weight.append(system.weight(key))
             frontier.append((known, key))
             if observer is not None:
                 observer.discovered(known, key)
         successors.append((known, effect))
     return successors
+
+
+def _may_close_cycle(search: Search, number: int, successors: list[tuple[int, Effect]]) -> bool:
+    """The cycle proviso for a state expanded by an ample set: expand it in full unless every
+    cycle through its ample edges is sure to meet a fully expanded state (docs/verify.md).
+
+    Ample steps send nothing, so along them the events in flight (`weight`) never grow: a cycle
+    of reduced states keeps the weight constant, and with it every edge's depth would have to
+    grow (breadth first, an edge goes at most one level deeper), which no cycle can. So an
+    ample edge that lowers the weight or reaches a new level is safe; one that keeps the
+    weight and goes back to a level already reached might close a cycle. A self-loop (a
+    retried behaviour back where it was) is allowed when another ample edge leaves the state:
+    the step it repeats changes nothing, and the other edge carries the run on."""
+    depth, weight = search.depth[number], search.weight[number]
+    leaving = [n for n, _ in successors if n != number]
+    if not leaving:
+        return True
+    return any(search.depth[n] <= depth and search.weight[n] >= weight for n in leaving)
 
 
 def _decoupled(system: System, search: Search, number: int, state: SwarmState) -> bool:
@@ -204,6 +223,7 @@ def _decoupled(system: System, search: Search, number: int, state: SwarmState) -
         search.locals_read.add(value)
         kind = system.kinds[system.types[index]].name
         search.entered.setdefault(kind, set()).update(graph.entered)
+        search.sent.update(graph.sent)
         search.received.update(graph.received)
     return True
 
@@ -224,7 +244,7 @@ def _observe(system: System, search: Search, number: int, state: SwarmState) -> 
 
 
 def _key(system: System, state: SwarmState, budget: Budget) -> SwarmState:
-    return canonical(system, state)[0] if budget.symmetry else state
+    return canonical_state(system, state) if budget.symmetry else state
 
 
 def _line(search: Search, frontier: int, depth: int) -> str:

@@ -13,7 +13,9 @@ from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import FinalState, Model, State
 from swarmgen.ir.query import composition, walk
 from swarmgen.span import Span
+from swarmgen.verify.domains import endings
 from swarmgen.verify.kinds import make_kind
+from swarmgen.verify.state import thaw
 from swarmgen.verify.system import System
 
 DEFAULT_ABORT = "missionAbort"
@@ -77,7 +79,9 @@ def load(
         # `sim.machines.build_chart`'s copy
         chart, scopes = run_module(machine)
         kind_emits = {b: emits.get(b, ()) for b in machine.outputs}
-        kinds.append(make_kind(machine.member_type, chart, scopes, kind_emits))
+        kind = make_kind(machine.member_type, chart, scopes, kind_emits)
+        kind.endings = endings(model, chart, machine.member_type, thaw(kind.initial.data) or {})
+        kinds.append(kind)
         loaded.names[machine.member_type] = dict(chart.names)
     used = {e for m in machines.members for e in m.scopes}
     station = [e.name for e in model.events if e.sender == "station" and e.name in used]

@@ -75,7 +75,7 @@ class Reducer:
         engine, inbox = member.engine, member.inbox
         dropped: list[Message] = []
         if inbox and engine.running:
-            live = tuple(m for m in inbox if self._live(kind, engine.config, m.name))
+            live = tuple(m for m in inbox if self.live(kind, engine.config, m.name))
             if len(live) < len(inbox):
                 dropped.extend(m for m in inbox if m not in live)
                 inbox = live
@@ -94,7 +94,7 @@ class Reducer:
             inbox = ()
         return Normal(MemberState(engine, inbox), tuple(dropped))
 
-    def _live(self, kind: int, config: tuple[str, ...], name: str) -> bool:
+    def live(self, kind: int, config: tuple[str, ...], name: str) -> bool:
         """Whether some state the member can still reach has a transition on `name`."""
         key = (kind, config, name)
         known = self._live_memo.get(key)

@@ -139,6 +139,17 @@ class System:
         self._moves: dict[tuple[Any, ...], Move] = {}
         self._steps: dict[int, tuple[Step, ...]] = {}
         self._appends: dict[tuple[int, Message], tuple[int, tuple[Message, ...]]] = {}
+        self._indexed: dict[tuple[int, int], tuple[Step, ...]] = {}
+        self._quiet: dict[tuple[int, Step], tuple[int, Effect]] = {}  # `apply`, posting nothing
+        # the positions of each type's members (contiguous: `ids` lists them type by type)
+        self.groups: tuple[tuple[int, int], ...] = tuple(
+            (self.types.index(t), len(self.types) - self.types[::-1].index(t))
+            for t in sorted(set(self.types))
+        )
+        # the events a member may send (every swarm-scoped event its type knows)
+        self.member_events = sorted(
+            {name for k in self.kinds for name, scope in k.scopes.items() if scope != "local"}
+        )
         self.reducer = Reducer(self)
         self.ample_memo: dict[int, bool] = {}  # member value -> its steps are persistent
         self.local_memo: dict[int, Any] = {}  # member value -> its own graph (`decouple`)
@@ -154,6 +165,19 @@ class System:
             self.values.append(member)
             self.value_type.append(kind)
         return known
+
+    def hears(self, value: int) -> bool:
+        """Whether a running member value with an empty inbox could still take some event a
+        member may send (some state it can still reach has a transition on it: `decouple`)."""
+        kind = self.value_type[value]
+        config = self.values[value].engine.config
+        return any(self.reducer.live(kind, config, name) for name in self.member_events)
+
+    def weight(self, state: SwarmState) -> int:
+        """The events in flight in `state` (every inbox's length): ample steps never raise it
+        (the cycle proviso, `explore`)."""
+        values = self.values
+        return sum(len(values[v].inbox) for v in state.members)
 
     def member(self, state: SwarmState, index: int) -> MemberState:
         """The value of the member at `index` of `state`."""
@@ -190,11 +214,19 @@ class System:
         """Every step enabled in `state`, in a fixed order (member steps, then the station)."""
         found: list[Step] = []
         for index, value in enumerate(state.members):
-            found.extend(
-                Step(s.kind, index, s.event, s.state, s.data) for s in self.local_steps(value)
-            )
+            found.extend(self.member_steps(value, index))
         found.extend(Step("station", event=e) for e in self.station_events(state))
         return found
+
+    def member_steps(self, value: int, index: int) -> tuple[Step, ...]:
+        """The steps of a member value at position `index` (computed once)."""
+        key = (value, index)
+        known = self._indexed.get(key)
+        if known is None:
+            known = self._indexed[key] = tuple(
+                Step(s.kind, index, s.event, s.state, s.data) for s in self.local_steps(value)
+            )
+        return known
 
     def local_steps(self, value: int) -> tuple[Step, ...]:
         """The steps of one member value (member -1): its next delivery, its behaviours'
@@ -266,7 +298,14 @@ class System:
         if step.kind == "station":
             return self._station(state, step)
         index = step.member
-        move = self.move(state.members[index], step)
+        value = state.members[index]
+        quiet = self._quiet.get((value, step))
+        if quiet is not None:  # a step that posts nothing: only its member changes
+            after, effect = quiet
+            now = state.members
+            changed = (*now[:index], after, *now[index + 1 :])
+            return SwarmState(changed, state.aborted, state.station), effect
+        move = self.move(value, step)
         members = list(state.members)
         members[index] = move.after
         dropped = [(index, m) for m in move.dropped]
@@ -287,6 +326,8 @@ class System:
             member, e.replay, e.event, e.source, e.changed, e.sent, e.entered, tuple(dropped),
             tuple(lost),
         )  # fmt: skip
+        if not move.posts:
+            self._quiet[(value, step)] = (move.after, effect)
         return SwarmState(tuple(members), state.aborted, state.station), effect
 
     def _station(self, state: SwarmState, step: Step) -> tuple[SwarmState, Effect]:
@@ -353,6 +394,17 @@ class System:
         left = self.values[after_id].inbox
         kept = frozenset(m for m in own if m in left[len(left) - len(own) :])
         return Move(after_id, posts, effect, dropped, kept)
+
+
+def canonical_state(system: System, state: SwarmState) -> SwarmState:
+    """`canonical`'s state alone (the search's key under symmetry), without the permutation."""
+    members = state.members
+    ordered: list[int] = []
+    for start, end in system.groups:
+        ordered.extend(sorted(members[start:end]))
+    if tuple(ordered) == members:
+        return state
+    return SwarmState(tuple(ordered), state.aborted, state.station)
 
 
 def canonical(system: System, state: SwarmState) -> tuple[SwarmState, list[int]]:
