@@ -311,11 +311,8 @@ Action = Annotated[
     Assign | Raise | Send | Cancel | If | ForEach | Done | Log | Block,
     Field(discriminator="kind"),
 ]
-
-Branch.model_rebuild()
-If.model_rebuild()
-ForEach.model_rebuild()
-Block.model_rebuild()
+# Branch, If, Block and ForEach refer to `Action`, defined after them: with `defer_build` the
+# forward reference is resolved when a class is first validated (never, when fastnode fills it).
 
 
 def flat(actions: Iterable[Action]) -> Iterator[Action]:
