@@ -290,10 +290,14 @@ class Context:
     def field(self, name: str) -> Any:
         """`event.<name>`: a field the current event does not carry is an error (SCXML's
         error.execution; the guard is false), as `$sg.field` in the emitted SCXML."""
-        data = self.event.data if self.event is not None else None
-        if not isinstance(data, Mapping) or name not in data:
-            raise KeyError(f"the event has no field {name!r}")
-        return data[name]
+        event = self.event
+        data = event.data if event is not None else None
+        if type(data) is Record:  # what the engine fills: no ABC check
+            if name in data:
+                return data[name]
+        elif isinstance(data, Mapping) and name in data:
+            return data[name]
+        raise KeyError(f"the event has no field {name!r}")
 
     def opaque(self, language: str, text: str) -> None:
         """Code in a language swarmgen does not execute: recorded, not run."""

@@ -30,7 +30,7 @@ from swarmgen.runtime.chart import (
     Transition,
     record,
 )
-from swarmgen.runtime.configuration import Configuration, Plan, Selection, Tables
+from swarmgen.runtime.configuration import Chain, Configuration, Plan, Selection, Tables
 from swarmgen.runtime.host import Event, Host, NullHost
 from swarmgen.runtime.microstep import document_order, in_final
 
@@ -61,11 +61,15 @@ class Engine:
         self._ids = itertools.count(1)
         self._sends = 0  # delayed raises without a send id so far (their keys: `send.<n>`)
         self.session_id = f"{self.chart.name}:{self.member_id}"  # `_sessionid`
-        self._events = self.chart.events
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
         self._tables: Tables = self.chart.tables
+        # The value rule: a declared field the sender left out holds its default. Every declared
+        # event's filler is made once per chart, so `send` finds it (or no filler) in one look-up.
         self._fillers = self._tables.fillers
+        for name, template in self.chart.events.items():
+            if template and name not in self._fillers:
+                self._tables.filler(name, template)
         # The interned configuration, None while a microstep changes `config` (or after one
         # was interrupted by an exception): the next selection interns `config` again.
         self._cfg: Configuration | None = None
@@ -96,18 +100,24 @@ class Engine:
         if event.origin is not None and not self._current_activation(event.origin):
             return  # the outcome of a behaviour that was cancelled: discarded
         name = event.name
-        template = self._events.get(name)
-        if template:  # the value rule: a declared field the sender left out holds its default
-            fill = self._fillers.get(name) or self._tables.filler(name, template)
+        fill = self._fillers.get(name)
+        if fill is not None:  # a declared event (the value rule)
             event.data = fill(event.data)
         self.ctx.event = event
         cfg = self._cfg or self._configuration()
         selection = cfg.selections.get(name) or cfg.selection(name)
+        now: Configuration | None = cfg
         if selection.chains:
-            enabled = self._choose(selection)
+            static = selection.static  # `_choose`'s answer where it evaluates and counts nothing
+            enabled = self._choose(selection) if static is None or self._bounded else static
             if enabled:
                 self._microstep(enabled)
-        self._macrostep()
+                now = self._cfg
+        # The rest of the macrostep: most events leave nothing eventless or internal to do.
+        if now is None or now.eventless.chains or self.internal:
+            self._macrostep()
+        elif self._to_invoke:
+            self._start_calls()
 
     def make_event(
         self, name: str, data: Mapping[str, Any] | None = None, sender: str = "", **extra: Any
@@ -245,7 +255,8 @@ class Engine:
                 selection = cfg.selections.get(name) or cfg.selection(name)
                 if not selection.chains:
                     continue
-                enabled = self._choose(selection)
+                static = selection.static
+                enabled = self._choose(selection) if static is None or self._bounded else static
             if enabled:
                 self._microstep(enabled)
         if self._to_invoke:
@@ -294,22 +305,29 @@ class Engine:
         for fixed, chain in selection.chains:
             chosen = fixed
             if chosen is None:
-                for owner, candidates in chain:
-                    chosen = self._first_enabled(owner, candidates)
-                    if chosen is not None:
-                        break
-                else:
+                chosen = self._first_enabled(chain)
+                if chosen is None:
                     continue
             if chosen not in enabled:
                 enabled.append(chosen)
         return tuple(enabled)
 
-    def _first_enabled(self, owner: Node, candidates: tuple[Transition, ...]) -> Transition | None:
-        for transition in candidates:
-            if (transition.cond is None or self._guarded(transition.cond, owner) is True) and (
-                not transition.bounded or self._step_allowed(owner)
-            ):
-                return transition
+    def _first_enabled(self, chain: Chain) -> Transition | None:
+        """The first candidate along the chain whose guard holds and the step bound allows."""
+        ctx = self.ctx
+        for owner, candidates in chain:
+            for transition in candidates:
+                cond = transition.cond
+                if cond is not None:
+                    try:
+                        held = cond(ctx)
+                    except Exception as err:  # a guard that cannot be evaluated is false (5.9)
+                        self._error(f"guard in {owner.id}", err)
+                        continue
+                    if held is not True:
+                        continue
+                if not transition.bounded or self._step_allowed(owner):
+                    return transition
         return None
 
     def _restart_count(self, event: Event | None) -> None:
@@ -346,17 +364,33 @@ class Engine:
             for node, recorded in plan.records:
                 self.history[node] = recorded
             config = self.config
-            if plan.quiet_exits:  # nothing runs as they are left: no order to keep
+            cancels = plan.cancels
+            if cancels is not None:  # no exit action runs: no state sees the others leave
+                activations = self._activation
+                for state in cancels:  # `_leave`, which has no exit action to run here
+                    activation = activations.get(state) if state.call is not None else None
+                    if activation is not None:
+                        self.host.cancel_call(state, activation)
+                        activations[state] = activation + 1  # late outcomes of it are stale
+                    for event, _ in state.timers:
+                        self.host.cancel_timer(state, event)
                 config.difference_update(exits)
             else:
                 for state in exits:
                     if state.call is not None or state.timers or state.onexit is not None:
                         self._leave(state)
                     config.discard(state)
-        for transition in plan.transitions:
-            if transition.action is not None:
-                self._run(transition.action, "transition from", transition.source)
-        self._enter(plan)
+        for action, source in plan.actions:
+            self._run(action, "transition from", source)
+        entered = plan.entered
+        if entered is None:
+            self._enter(plan)
+            return
+        # nothing runs as they are entered (behaviours start after the macrostep): no order
+        self.config.update(entered)
+        if plan.calls:
+            self._to_invoke.update(plan.calls)
+        self._cfg = plan.after or self._tables.after(plan)
 
     def _leave(self, state: Node) -> None:
         """Cancel a state's behaviour and timers and run its exit actions."""
@@ -375,6 +409,7 @@ class Engine:
         config = self.config
         if plan.entered is not None:  # nothing runs as they are entered: no order to keep
             config.update(plan.entered)
+            self._to_invoke.update(plan.calls)
             self._cfg = plan.after or self._tables.after(plan)
             return
         for state, initial, default in plan.entries:
@@ -437,13 +472,6 @@ class Engine:
             action(self.ctx)
         except Exception as err:  # SCXML: an error stops the block and raises error.execution
             self._error(f"{what} {node.id}", err)
-
-    def _guarded(self, function: Callable[[Context], Any], owner: Node) -> Any:
-        try:
-            return function(self.ctx)
-        except Exception as err:  # a guard that cannot be evaluated is false (SCXML 5.9)
-            self._error(f"guard in {owner.id}", err)
-            return None
 
     def _error(self, where: str, err: BaseException) -> None:
         self.error_count += 1  # error events raised: execution and communication (as Qt)

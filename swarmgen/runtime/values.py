@@ -102,49 +102,78 @@ def defaults_maker(
 ) -> Callable[[], Record]:
     """A function making `fill(None, template)`: a new Record tree of the template's values.
 
-    Where every leaf is a plain value (the usual message type), it is one expression compiled
-    from the template's shape: it makes each Record of the tree with a single dict display,
-    instead of a call per field and level (an event's defaults are made on every arrival).
-    Only indices into `constants` appear in its text, never a key or a value of the model."""
+    Where every leaf is a plain value (the usual message type), it is a function compiled from
+    the template's shape: each Record of the tree is a copy of a prototype dict holding the
+    level's plain values (the nested ones' places kept, in order, by None), and the nested
+    Records are then put in their places; a copy of a dict costs less than a field at a time
+    (an event's defaults are made on every arrival). Only indices into `constants` appear in
+    its text, never a key or a value of the model."""
     constants: list[Any] = []
+    lines: list[str] = []
 
-    def text(value: Mapping[Any, Any], key_of: Callable[[Any], Any]) -> str | None:
-        items = []
+    def level(value: Mapping[Any, Any], key_of: Callable[[Any], Any]) -> str | None:
+        """The variable the level's Record is made in (None: not a tree of plain values)."""
+        prototype: dict[Any, Any] = {}
+        nested = []
         for k, v in value.items():
-            constants.append(key_of(k))
-            key = f"C[{len(constants) - 1}]"
+            key = key_of(k)
             if type(v) in _PLAIN:
-                constants.append(v)
-                items.append(f"{key}: C[{len(constants) - 1}]")
+                prototype[key] = v
             elif isinstance(v, Mapping):
-                inner = text(v, str)
-                if inner is None:
-                    return None
-                items.append(f"{key}: {inner}")
+                prototype[key] = None
+                nested.append((key, v))
             else:
                 return None  # a list: made by `fill` itself
-        return "R({" + ", ".join(items) + "})"
+        if len(prototype) < len(value):
+            return None  # keys equal as strings: `fill` decides which one wins
+        made = f"r{len(lines)}"
+        constants.append(prototype)
+        lines.append(f"{made} = R(C[{len(constants) - 1}])")
+        for key, v in nested:
+            inner = level(v, str)
+            if inner is None:
+                return None
+            constants.append(key)
+            lines.append(f"{made}[C[{len(constants) - 1}]] = {inner}")
+        return made
 
-    expression = text(template, outer_key)
-    if expression is None:
+    top = level(template, outer_key)
+    if top is None:
         return lambda: Record({outer_key(k): fill(None, v) for k, v in template.items()})
-    made: Callable[[], Record] = eval(
-        f"lambda: {expression}", {"__builtins__": {}, "R": Record, "C": tuple(constants)}
-    )
+    text = "def make():\n" + "".join(f"    {line}\n" for line in lines) + f"    return {top}\n"
+    namespace: dict[str, Any] = {"__builtins__": {}, "R": Record, "C": tuple(constants)}
+    exec(text, namespace)
+    made: Callable[[], Record] = namespace["make"]
     return made
 
 
 def fields_filler(template: Mapping[str, Any]) -> Callable[[Mapping[str, Any] | None], Record]:
     """`fill_fields(data, template)` as a function of `data`, made once per event name."""
-    parts = tuple((key, filler(default)) for key, default in template.items())
+    # per field: its default where that is a plain value (`filler`'s, inlined), else its filler
+    parts = tuple(
+        (key, default, None if type(default) in _PLAIN else filler(default))
+        for key, default in template.items()
+    )
     fresh = defaults_maker(template, lambda key: key)  # `fill_fields` keeps the keys as they are
 
     def fill_event(data: Mapping[str, Any] | None) -> Record:
-        if not isinstance(data, Mapping) or not data:
+        if not data or not isinstance(data, Mapping):  # None first: no ABC check
             return fresh()
-        filled = Record({str(k): record(v) for k, v in data.items()})
-        for key, part in parts:
-            filled[key] = part(data.get(key))
+        # `record` of each value, called only for what is not a plain value
+        filled = Record(
+            {
+                k if type(k) is str else str(k): v if type(v) in _PLAIN else record(v)
+                for k, v in data.items()
+            }
+        )
+        for key, default, part in parts:
+            value = data.get(key)
+            if part is not None:
+                filled[key] = part(value)
+            elif value is None:
+                filled[key] = default
+            else:
+                filled[key] = value if type(value) in _PLAIN else record(value)
         return filled
 
     return fill_event
