@@ -251,6 +251,9 @@ class Step:
     entries: tuple[Entry, ...]
     entered: frozenset[Node]
     quiet: Quiet  # `entered_quietly(entries)`
+    # What each of its plans shares: the transitions taken, their actions (`plan_of`'s)
+    taken: tuple[Transition, ...] = ()
+    actions: tuple[tuple[Action, Node], ...] = ()
 
     @classmethod
     def of(cls, transition: Transition) -> Step | None:
@@ -266,8 +269,11 @@ class Step:
             return None
         entries = _entries(entry)
         states = frozenset(entry.to_enter)
+        taken = (transition,)
+        actions = ((transition.action, transition.source),) if transition.action is not None else ()
+        quiet = entered_quietly(entries)
         return cls(
-            transition, bool(transition.targets), scope, entries, states, entered_quietly(entries)
+            transition, bool(transition.targets), scope, entries, states, quiet, taken, actions
         )
 
     def plan(
@@ -293,7 +299,20 @@ class Step:
             else ()
         )
         target = config.difference(exits) | self.entered
-        return plan_of((self.transition,), exits, records, self.entries, target, (), self.quiet)
+        entered, calls = self.quiet if self.quiet is not None else (None, ())
+        return Plan(
+            self.taken,
+            exits,
+            records,
+            self.entries,
+            target,
+            (),
+            None,
+            cancels(exits),
+            entered,
+            calls,
+            self.actions,
+        )
 
 
 def history_children(state: Node) -> tuple[Node, ...]:
@@ -310,9 +329,10 @@ class Configuration:
         self.states = states
         self.tables = tables
         self.steps = tables.steps
-        self.atomic = tuple(sorted((n for n in states if n.is_atomic), key=document_order))
+        self.atomic = tuple(sorted([n for n in states if n.is_atomic], key=document_order))
         # looked at after every microstep
-        self.eventless = Selection.of(self.atomic, tables.eventless)
+        eventless = tables.eventless
+        self.eventless = Selection.of(self.atomic, eventless) if eventless else NO_SELECTION
         self.selections: dict[str | None, Selection] = {}
         self.plans: dict[tuple[Transition, ...], Plan] = {}
 
@@ -322,7 +342,12 @@ class Configuration:
         if found is None:
             if len(self.selections) >= ENTRY_LIMIT:
                 self.selections.clear()
-            found = self.selections[name] = Selection.of(self.atomic, self.tables.reactors(name))
+            alone = self.tables.alone.get(name)
+            if alone is not None:  # the same in every configuration where its state is active
+                found = alone[1] if alone[0] in self.states else NO_SELECTION
+            else:
+                found = Selection.of(self.atomic, self.tables.reactors(name))
+            self.selections[name] = found
         return found
 
     def plan(self, enabled: tuple[Transition, ...], history: History) -> Plan:
@@ -353,6 +378,7 @@ class Tables:
     same chart share them: a plan depends on nothing an engine has of its own)."""
 
     __slots__ = (
+        "alone",
         "by_descriptor",
         "by_name",
         "configurations",
@@ -374,7 +400,10 @@ class Tables:
         self.steps: dict[Transition, Step | None] = {}
         names: dict[str, None] = {}  # the names the chart itself gives, in document order
         self.histories: dict[Node, tuple[Node, ...]] = {}  # the states with history nodes
+        above_parallel: set[Node] = set()  # the parallel states and their ancestors
         for node in nodes:
+            if node.kind == "parallel":
+                above_parallel.update(node.lineage)
             if node.kind == "history" and node.parent is not None:
                 self.histories[node.parent] = history_children(node.parent)
             if node.eventless:
@@ -392,6 +421,15 @@ class Tables:
         # What reacts to each name the chart gives (a descriptor, a behaviour's outcome), made
         # here: as many as the chart has transitions and outcomes, so unbounded.
         self.known: dict[str, Reactors] = {name: self._reactors(name) for name in names}
+        # Of those, each name only one state reacts to, where no parallel state lies below it
+        # (so an active one has one active atomic state below it): the state and the selection
+        # of the name in any configuration that has the state active.
+        self.alone: dict[str, tuple[Node, Selection]] = {}
+        for name, reactors in self.known.items():
+            if len(reactors) == 1:
+                for owner in reactors:
+                    if owner not in above_parallel:
+                        self.alone[name] = (owner, Selection.of((owner,), reactors))
         self.fillers: dict[str, Callable[[Mapping[str, Any] | None], Record]] = {}
 
     def filler(

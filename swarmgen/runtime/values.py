@@ -21,12 +21,12 @@ class Record(dict[str, Any]):
             raise AttributeError(name) from None
 
 
-_PLAIN = frozenset({str, int, float, bool, type(None)})  # what `record` returns as it is
+PLAIN = frozenset({str, int, float, bool, type(None)})  # the types `record` returns as they are
 
 
 def record(value: Any) -> Any:
     """Deep-convert mappings to Records (lists are kept as lists of converted items)."""
-    if type(value) in _PLAIN:  # the common case, without the slow ABC checks below
+    if type(value) in PLAIN:  # the common case, without the slow ABC checks below
         return value
     if isinstance(value, Mapping):
         return Record({str(k): record(v) for k, v in value.items()})
@@ -57,7 +57,7 @@ def fill(value: Any, template: Any) -> Any:
     the template has, what is missing (or null) taking the template's value, recursively; a
     field the type does not have is dropped (a ROS message's `header.stamp` where the model's
     type has none, a sender's extra key), so a datum holds exactly its type's fields."""
-    if type(template) in _PLAIN:
+    if type(template) in PLAIN:
         return template if value is None else record(value)
     if isinstance(template, Mapping):
         given = value if isinstance(value, Mapping) else {}
@@ -81,7 +81,7 @@ Filler = Callable[[Any], Any]
 def filler(template: Any) -> Filler:
     """`fill(value, template)` as a function of `value`, the template's walk done once (an
     event's fields are filled on every arrival of the event)."""
-    if type(template) in _PLAIN:
+    if type(template) in PLAIN:
         return lambda value: template if value is None else record(value)
     if not isinstance(template, Mapping):
         return lambda value: record(template) if value is None else record(value)
@@ -117,7 +117,7 @@ def defaults_maker(
         nested = []
         for k, v in value.items():
             key = key_of(k)
-            if type(v) in _PLAIN:
+            if type(v) in PLAIN:
                 prototype[key] = v
             elif isinstance(v, Mapping):
                 prototype[key] = None
@@ -151,18 +151,18 @@ def fields_filler(template: Mapping[str, Any]) -> Callable[[Mapping[str, Any] | 
     """`fill_fields(data, template)` as a function of `data`, made once per event name."""
     # per field: its default where that is a plain value (`filler`'s, inlined), else its filler
     parts = tuple(
-        (key, default, None if type(default) in _PLAIN else filler(default))
+        (key, default, None if type(default) in PLAIN else filler(default))
         for key, default in template.items()
     )
     fresh = defaults_maker(template, lambda key: key)  # `fill_fields` keeps the keys as they are
 
     def fill_event(data: Mapping[str, Any] | None) -> Record:
-        if not data or not isinstance(data, Mapping):  # None first: no ABC check
-            return fresh()
+        if not data or (type(data) is not Record and not isinstance(data, Mapping)):
+            return fresh()  # (None and Records first: no ABC check)
         # `record` of each value, called only for what is not a plain value
         filled = Record(
             {
-                k if type(k) is str else str(k): v if type(v) in _PLAIN else record(v)
+                k if type(k) is str else str(k): v if type(v) in PLAIN else record(v)
                 for k, v in data.items()
             }
         )
@@ -173,7 +173,7 @@ def fields_filler(template: Mapping[str, Any]) -> Callable[[Mapping[str, Any] | 
             elif value is None:
                 filled[key] = default
             else:
-                filled[key] = value if type(value) in _PLAIN else record(value)
+                filled[key] = value if type(value) in PLAIN else record(value)
         return filled
 
     return fill_event
