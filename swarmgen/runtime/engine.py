@@ -31,7 +31,7 @@ from swarmgen.runtime.chart import (
     record,
 )
 from swarmgen.runtime.configuration import Chain, Configuration, Plan, Selection, Tables
-from swarmgen.runtime.host import Event, Host, NullHost
+from swarmgen.runtime.host import PROCESSOR, Event, Host, NullHost, event_fields
 from swarmgen.runtime.microstep import document_order, in_final
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
@@ -380,8 +380,11 @@ class Engine:
                     if state.call is not None or state.timers or state.onexit is not None:
                         self._leave(state)
                     config.discard(state)
-        for action, source in plan.actions:
-            self._run(action, "transition from", source)
+        for action, source in plan.actions:  # `_run`'s, inlined (one per transition taken)
+            try:
+                action(self.ctx)
+            except Exception as err:  # SCXML: the block stops and raises error.execution
+                self._error(f"transition from {source.id}", err)
         entered = plan.entered
         if entered is None:
             self._enter(plan)
@@ -480,29 +483,3 @@ class Engine:
         self.internal.append(self.make_event(name, None, kind="platform"))
         if self.on_error is not None:
             self.on_error(where, err)
-
-
-PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"  # W3C's SCXML event I/O processor
-_TYPES = {"internal": "internal", "platform": "platform"}  # the rest is "external"
-
-
-def event_fields(event: Event) -> Record:
-    """`_event`'s W3C fields, with "" for a field W3C leaves blank and `{}` for no data: what
-    the SCXML document's `$sg.meta` makes of Qt SCXML's (docs/semantics.md). An event this
-    member sent itself (a raise with data, a delayed raise, a time event) has the origin
-    `#_internal` and the SCXML processor's type; only delayed raises with `as` and time
-    events (whose send id is their name) have a send id."""
-    name = event.name
-    timer = name.startswith("after.")
-    sendid = name if timer else (event.sendid or "")
-    sent = timer or event.sendid is not None or event.kind == "raised"
-    data: Any = event.data  # a Record, or any value a final state's done(expr) gave
-    return Record(
-        name=name,
-        type=_TYPES.get(event.kind, "external"),
-        sendid=sendid,
-        origin="#_internal" if sent else "",
-        origintype=PROCESSOR if sent else "",
-        invokeid="",
-        data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
-    )

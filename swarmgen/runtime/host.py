@@ -8,7 +8,7 @@ from typing import Any, Protocol
 from swarmgen.runtime.chart import Call, Node
 from swarmgen.runtime.values import Record
 
-__all__ = ["Event", "Host", "NullHost"]
+__all__ = ["PROCESSOR", "Event", "Host", "NullHost", "event_fields"]
 
 
 @dataclass(slots=True)
@@ -96,3 +96,29 @@ class NullHost:
     def deliver(self, event: Event) -> None:
         """Record the event to itself."""
         self.delivered.append(event)
+
+
+PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"  # W3C's SCXML event I/O processor
+_TYPES = {"internal": "internal", "platform": "platform"}  # the rest is "external"
+
+
+def event_fields(event: Event) -> Record:
+    """`_event`'s W3C fields, with "" for a field W3C leaves blank and `{}` for no data: what
+    the SCXML document's `$sg.meta` makes of Qt SCXML's (docs/semantics.md). An event this
+    member sent itself (a raise with data, a delayed raise, a time event) has the origin
+    `#_internal` and the SCXML processor's type; only delayed raises with `as` and time
+    events (whose send id is their name) have a send id."""
+    name = event.name
+    timer = name.startswith("after.")
+    sendid = name if timer else (event.sendid or "")
+    sent = timer or event.sendid is not None or event.kind == "raised"
+    data: Any = event.data  # a Record, or any value a final state's done(expr) gave
+    return Record(
+        name=name,
+        type=_TYPES.get(event.kind, "external"),
+        sendid=sendid,
+        origin="#_internal" if sent else "",
+        origintype=PROCESSOR if sent else "",
+        invokeid="",
+        data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
+    )

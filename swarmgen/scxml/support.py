@@ -95,7 +95,7 @@ $sg.duration = function (v) {
 };
 """
 # `_event.<field>` (only in a document that reads one): W3C's fields as the engine gives them
-# (`runtime.engine.event_fields`): "" where Qt SCXML leaves a field undefined, `{}` for no data,
+# (`runtime.host.event_fields`): "" where Qt SCXML leaves a field undefined, `{}` for no data,
 # the processor's type only with an origin (Qt also gives it to error.execution).
 META_SCRIPT = """
 $sg.meta = function (e, f) {

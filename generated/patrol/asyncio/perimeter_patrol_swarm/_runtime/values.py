@@ -22,12 +22,12 @@ class Record(dict[str, Any]):
             raise AttributeError(name) from None
 
 
-_PLAIN = frozenset({str, int, float, bool, type(None)})  # what `record` returns as it is
+PLAIN = frozenset({str, int, float, bool, type(None)})  # the types `record` returns as they are
 
 
 def record(value: Any) -> Any:
     """Deep-convert mappings to Records (lists are kept as lists of converted items)."""
-    if type(value) in _PLAIN:  # the common case, without the slow ABC checks below
+    if type(value) in PLAIN:  # the common case, without the slow ABC checks below
         return value
     if isinstance(value, Mapping):
         return Record({str(k): record(v) for k, v in value.items()})
@@ -58,7 +58,7 @@ def fill(value: Any, template: Any) -> Any:
     the template has, what is missing (or null) taking the template's value, recursively; a
     field the type does not have is dropped (a ROS message's `header.stamp` where the model's
     type has none, a sender's extra key), so a datum holds exactly its type's fields."""
-    if type(template) in _PLAIN:
+    if type(template) in PLAIN:
         return template if value is None else record(value)
     if isinstance(template, Mapping):
         given = value if isinstance(value, Mapping) else {}
@@ -82,7 +82,7 @@ Filler = Callable[[Any], Any]
 def filler(template: Any) -> Filler:
     """`fill(value, template)` as a function of `value`, the template's walk done once (an
     event's fields are filled on every arrival of the event)."""
-    if type(template) in _PLAIN:
+    if type(template) in PLAIN:
         return lambda value: template if value is None else record(value)
     if not isinstance(template, Mapping):
         return lambda value: record(template) if value is None else record(value)
@@ -103,49 +103,78 @@ def defaults_maker(
 ) -> Callable[[], Record]:
     """A function making `fill(None, template)`: a new Record tree of the template's values.
 
-    Where every leaf is a plain value (the usual message type), it is one expression compiled
-    from the template's shape: it makes each Record of the tree with a single dict display,
-    instead of a call per field and level (an event's defaults are made on every arrival).
-    Only indices into `constants` appear in its text, never a key or a value of the model."""
+    Where every leaf is a plain value (the usual message type), it is a function compiled from
+    the template's shape: each Record of the tree is a copy of a prototype dict holding the
+    level's plain values (the nested ones' places kept, in order, by None), and the nested
+    Records are then put in their places; a copy of a dict costs less than a field at a time
+    (an event's defaults are made on every arrival). Only indices into `constants` appear in
+    its text, never a key or a value of the model."""
     constants: list[Any] = []
+    lines: list[str] = []
 
-    def text(value: Mapping[Any, Any], key_of: Callable[[Any], Any]) -> str | None:
-        items = []
+    def level(value: Mapping[Any, Any], key_of: Callable[[Any], Any]) -> str | None:
+        """The variable the level's Record is made in (None: not a tree of plain values)."""
+        prototype: dict[Any, Any] = {}
+        nested = []
         for k, v in value.items():
-            constants.append(key_of(k))
-            key = f"C[{len(constants) - 1}]"
-            if type(v) in _PLAIN:
-                constants.append(v)
-                items.append(f"{key}: C[{len(constants) - 1}]")
+            key = key_of(k)
+            if type(v) in PLAIN:
+                prototype[key] = v
             elif isinstance(v, Mapping):
-                inner = text(v, str)
-                if inner is None:
-                    return None
-                items.append(f"{key}: {inner}")
+                prototype[key] = None
+                nested.append((key, v))
             else:
                 return None  # a list: made by `fill` itself
-        return "R({" + ", ".join(items) + "})"
+        if len(prototype) < len(value):
+            return None  # keys equal as strings: `fill` decides which one wins
+        made = f"r{len(lines)}"
+        constants.append(prototype)
+        lines.append(f"{made} = R(C[{len(constants) - 1}])")
+        for key, v in nested:
+            inner = level(v, str)
+            if inner is None:
+                return None
+            constants.append(key)
+            lines.append(f"{made}[C[{len(constants) - 1}]] = {inner}")
+        return made
 
-    expression = text(template, outer_key)
-    if expression is None:
+    top = level(template, outer_key)
+    if top is None:
         return lambda: Record({outer_key(k): fill(None, v) for k, v in template.items()})
-    made: Callable[[], Record] = eval(
-        f"lambda: {expression}", {"__builtins__": {}, "R": Record, "C": tuple(constants)}
-    )
+    text = "def make():\n" + "".join(f"    {line}\n" for line in lines) + f"    return {top}\n"
+    namespace: dict[str, Any] = {"__builtins__": {}, "R": Record, "C": tuple(constants)}
+    exec(text, namespace)
+    made: Callable[[], Record] = namespace["make"]
     return made
 
 
 def fields_filler(template: Mapping[str, Any]) -> Callable[[Mapping[str, Any] | None], Record]:
     """`fill_fields(data, template)` as a function of `data`, made once per event name."""
-    parts = tuple((key, filler(default)) for key, default in template.items())
+    # per field: its default where that is a plain value (`filler`'s, inlined), else its filler
+    parts = tuple(
+        (key, default, None if type(default) in PLAIN else filler(default))
+        for key, default in template.items()
+    )
     fresh = defaults_maker(template, lambda key: key)  # `fill_fields` keeps the keys as they are
 
     def fill_event(data: Mapping[str, Any] | None) -> Record:
-        if not isinstance(data, Mapping) or not data:
-            return fresh()
-        filled = Record({str(k): record(v) for k, v in data.items()})
-        for key, part in parts:
-            filled[key] = part(data.get(key))
+        if not data or (type(data) is not Record and not isinstance(data, Mapping)):
+            return fresh()  # (None and Records first: no ABC check)
+        # `record` of each value, called only for what is not a plain value
+        filled = Record(
+            {
+                k if type(k) is str else str(k): v if type(v) in PLAIN else record(v)
+                for k, v in data.items()
+            }
+        )
+        for key, default, part in parts:
+            value = data.get(key)
+            if part is not None:
+                filled[key] = part(value)
+            elif value is None:
+                filled[key] = default
+            else:
+                filled[key] = value if type(value) in PLAIN else record(value)
         return filled
 
     return fill_event

@@ -31,8 +31,8 @@ from .chart import (
     Transition,
     record,
 )
-from .configuration import Configuration, Plan, Selection, Tables
-from .host import Event, Host, NullHost
+from .configuration import Chain, Configuration, Plan, Selection, Tables
+from .host import PROCESSOR, Event, Host, NullHost, event_fields
 from .microstep import document_order, in_final
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
@@ -62,11 +62,15 @@ class Engine:
         self._ids = itertools.count(1)
         self._sends = 0  # delayed raises without a send id so far (their keys: `send.<n>`)
         self.session_id = f"{self.chart.name}:{self.member_id}"  # `_sessionid`
-        self._events = self.chart.events
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
         self._tables: Tables = self.chart.tables
+        # The value rule: a declared field the sender left out holds its default. Every declared
+        # event's filler is made once per chart, so `send` finds it (or no filler) in one look-up.
         self._fillers = self._tables.fillers
+        for name, template in self.chart.events.items():
+            if template and name not in self._fillers:
+                self._tables.filler(name, template)
         # The interned configuration, None while a microstep changes `config` (or after one
         # was interrupted by an exception): the next selection interns `config` again.
         self._cfg: Configuration | None = None
@@ -97,18 +101,24 @@ class Engine:
         if event.origin is not None and not self._current_activation(event.origin):
             return  # the outcome of a behaviour that was cancelled: discarded
         name = event.name
-        template = self._events.get(name)
-        if template:  # the value rule: a declared field the sender left out holds its default
-            fill = self._fillers.get(name) or self._tables.filler(name, template)
+        fill = self._fillers.get(name)
+        if fill is not None:  # a declared event (the value rule)
             event.data = fill(event.data)
         self.ctx.event = event
         cfg = self._cfg or self._configuration()
         selection = cfg.selections.get(name) or cfg.selection(name)
+        now: Configuration | None = cfg
         if selection.chains:
-            enabled = self._choose(selection)
+            static = selection.static  # `_choose`'s answer where it evaluates and counts nothing
+            enabled = self._choose(selection) if static is None or self._bounded else static
             if enabled:
                 self._microstep(enabled)
-        self._macrostep()
+                now = self._cfg
+        # The rest of the macrostep: most events leave nothing eventless or internal to do.
+        if now is None or now.eventless.chains or self.internal:
+            self._macrostep()
+        elif self._to_invoke:
+            self._start_calls()
 
     def make_event(
         self, name: str, data: Mapping[str, Any] | None = None, sender: str = "", **extra: Any
@@ -246,7 +256,8 @@ class Engine:
                 selection = cfg.selections.get(name) or cfg.selection(name)
                 if not selection.chains:
                     continue
-                enabled = self._choose(selection)
+                static = selection.static
+                enabled = self._choose(selection) if static is None or self._bounded else static
             if enabled:
                 self._microstep(enabled)
         if self._to_invoke:
@@ -295,22 +306,29 @@ class Engine:
         for fixed, chain in selection.chains:
             chosen = fixed
             if chosen is None:
-                for owner, candidates in chain:
-                    chosen = self._first_enabled(owner, candidates)
-                    if chosen is not None:
-                        break
-                else:
+                chosen = self._first_enabled(chain)
+                if chosen is None:
                     continue
             if chosen not in enabled:
                 enabled.append(chosen)
         return tuple(enabled)
 
-    def _first_enabled(self, owner: Node, candidates: tuple[Transition, ...]) -> Transition | None:
-        for transition in candidates:
-            if (transition.cond is None or self._guarded(transition.cond, owner) is True) and (
-                not transition.bounded or self._step_allowed(owner)
-            ):
-                return transition
+    def _first_enabled(self, chain: Chain) -> Transition | None:
+        """The first candidate along the chain whose guard holds and the step bound allows."""
+        ctx = self.ctx
+        for owner, candidates in chain:
+            for transition in candidates:
+                cond = transition.cond
+                if cond is not None:
+                    try:
+                        held = cond(ctx)
+                    except Exception as err:  # a guard that cannot be evaluated is false (5.9)
+                        self._error(f"guard in {owner.id}", err)
+                        continue
+                    if held is not True:
+                        continue
+                if not transition.bounded or self._step_allowed(owner):
+                    return transition
         return None
 
     def _restart_count(self, event: Event | None) -> None:
@@ -347,17 +365,36 @@ class Engine:
             for node, recorded in plan.records:
                 self.history[node] = recorded
             config = self.config
-            if plan.quiet_exits:  # nothing runs as they are left: no order to keep
+            cancels = plan.cancels
+            if cancels is not None:  # no exit action runs: no state sees the others leave
+                activations = self._activation
+                for state in cancels:  # `_leave`, which has no exit action to run here
+                    activation = activations.get(state) if state.call is not None else None
+                    if activation is not None:
+                        self.host.cancel_call(state, activation)
+                        activations[state] = activation + 1  # late outcomes of it are stale
+                    for event, _ in state.timers:
+                        self.host.cancel_timer(state, event)
                 config.difference_update(exits)
             else:
                 for state in exits:
                     if state.call is not None or state.timers or state.onexit is not None:
                         self._leave(state)
                     config.discard(state)
-        for transition in plan.transitions:
-            if transition.action is not None:
-                self._run(transition.action, "transition from", transition.source)
-        self._enter(plan)
+        for action, source in plan.actions:  # `_run`'s, inlined (one per transition taken)
+            try:
+                action(self.ctx)
+            except Exception as err:  # SCXML: the block stops and raises error.execution
+                self._error(f"transition from {source.id}", err)
+        entered = plan.entered
+        if entered is None:
+            self._enter(plan)
+            return
+        # nothing runs as they are entered (behaviours start after the macrostep): no order
+        self.config.update(entered)
+        if plan.calls:
+            self._to_invoke.update(plan.calls)
+        self._cfg = plan.after or self._tables.after(plan)
 
     def _leave(self, state: Node) -> None:
         """Cancel a state's behaviour and timers and run its exit actions."""
@@ -376,6 +413,7 @@ class Engine:
         config = self.config
         if plan.entered is not None:  # nothing runs as they are entered: no order to keep
             config.update(plan.entered)
+            self._to_invoke.update(plan.calls)
             self._cfg = plan.after or self._tables.after(plan)
             return
         for state, initial, default in plan.entries:
@@ -439,13 +477,6 @@ class Engine:
         except Exception as err:  # SCXML: an error stops the block and raises error.execution
             self._error(f"{what} {node.id}", err)
 
-    def _guarded(self, function: Callable[[Context], Any], owner: Node) -> Any:
-        try:
-            return function(self.ctx)
-        except Exception as err:  # a guard that cannot be evaluated is false (SCXML 5.9)
-            self._error(f"guard in {owner.id}", err)
-            return None
-
     def _error(self, where: str, err: BaseException) -> None:
         self.error_count += 1  # error events raised: execution and communication (as Qt)
         # no data, as in Qt SCXML: `where` and the error go to the host (`on_error`)
@@ -453,29 +484,3 @@ class Engine:
         self.internal.append(self.make_event(name, None, kind="platform"))
         if self.on_error is not None:
             self.on_error(where, err)
-
-
-PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"  # W3C's SCXML event I/O processor
-_TYPES = {"internal": "internal", "platform": "platform"}  # the rest is "external"
-
-
-def event_fields(event: Event) -> Record:
-    """`_event`'s W3C fields, with "" for a field W3C leaves blank and `{}` for no data: what
-    the SCXML document's `$sg.meta` makes of Qt SCXML's (docs/semantics.md). An event this
-    member sent itself (a raise with data, a delayed raise, a time event) has the origin
-    `#_internal` and the SCXML processor's type; only delayed raises with `as` and time
-    events (whose send id is their name) have a send id."""
-    name = event.name
-    timer = name.startswith("after.")
-    sendid = name if timer else (event.sendid or "")
-    sent = timer or event.sendid is not None or event.kind == "raised"
-    data: Any = event.data  # a Record, or any value a final state's done(expr) gave
-    return Record(
-        name=name,
-        type=_TYPES.get(event.kind, "external"),
-        sendid=sendid,
-        origin="#_internal" if sent else "",
-        origintype=PROCESSOR if sent else "",
-        invokeid="",
-        data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
-    )

@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from .chart import Action, Node, Transition
+from .chart import FINALIZE_PREFIX, Action, Node, Transition
 from .microstep import (
     EntrySet,
     History,
@@ -42,7 +42,7 @@ Reactors = Mapping[Node, tuple[Transition, ...]]
 Entry = tuple[Node, Action | None, Action | None]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(eq=False, slots=True)
 class Selection:
     """The transitions that could react to one event name in one configuration.
 
@@ -58,9 +58,19 @@ class Selection:
         """The selection over these atomic states of an event whose candidates are `reactors`."""
         if not reactors:
             return NO_SELECTION
+        if len(reactors) == 1:  # most names: one state reacts (a behaviour's outcome)
+            for owner, candidates in reactors.items():
+                pair = ((owner, candidates),)
+                first = candidates[0]
+                fixed = first if first.cond is None and not first.bounded else None
+                chained = tuple((fixed, pair) for state in atomic if owner in state.lineage)
+                if not chained:
+                    return NO_SELECTION
+                return cls(chained, None if fixed is None else (fixed,))
         chains: list[tuple[Transition | None, Chain]] = []
+        keys = reactors.keys()
         for state in atomic:
-            if reactors.keys().isdisjoint(state.lineage):  # most states: at C speed
+            if keys.isdisjoint(state.lineage):  # most states: at C speed
                 continue
             pairs = tuple((o, reactors[o]) for o in state.lineage if o in reactors)
             if pairs:
@@ -102,11 +112,16 @@ class Plan:
     target: frozenset[Node]  # the configuration after the microstep
     read: tuple[tuple[Node, Sequence[Node] | None], ...]
     other: Plan | None = None  # the plan of the same transitions under other history values
-    # For the engine: whether no exit runs anything (a behaviour, a timer, exit actions), so
-    # the states can leave the configuration at once; the entered states, where no entry runs
-    # anything either (None: the engine enters them one by one, in entry order).
-    quiet_exits: bool = False
+    # For the engine, worked out once. `cancels`: where no exit action runs, the exited states
+    # whose behaviour or timers are cancelled (exit order), the states then leaving the
+    # configuration at once (None: an exit action runs, the engine leaves them one by one).
+    # `entered`: where no entry runs anything (behaviours start after the macrostep), the
+    # entered states, and `calls` those with a behaviour (None: the engine enters them one by
+    # one, in entry order). `actions`: the taken transitions' actions with their sources.
+    cancels: tuple[Node, ...] | None = None
     entered: tuple[Node, ...] | None = None
+    calls: tuple[Node, ...] = ()
+    actions: tuple[tuple[Action, Node], ...] = ()
     after: Configuration | None = None  # the target's interned configuration, once looked up
 
     def holds(self, history: History) -> bool:
@@ -153,34 +168,50 @@ def make_plan(config: frozenset[Node], enabled: Sequence[Transition], history: H
     target = config.difference(exits) | entry.to_enter
     entries = _entries(entry)
     read = tuple(reads.read.items())
+    return plan_of(taken, exits, records, entries, target, read, entered_quietly(entries))
+
+
+def plan_of(
+    taken: tuple[Transition, ...],
+    exits: tuple[Node, ...],
+    records: tuple[tuple[Node, tuple[Node, ...]], ...],
+    entries: tuple[Entry, ...],
+    target: frozenset[Node],
+    read: tuple[tuple[Node, Sequence[Node] | None], ...],
+    quiet: Quiet,
+) -> Plan:
+    """The plan with what the engine reads instead of working it out per microstep; `quiet`
+    is `entered_quietly(entries)`."""
+    actions = tuple((t.action, t.source) for t in taken if t.action is not None)
+    entered, calls = quiet if quiet is not None else (None, ())
     return Plan(
-        taken,
-        exits,
-        records,
-        entries,
-        target,
-        read,
-        None,
-        leaves_quietly(exits),
-        entered_quietly(entries),
+        taken, exits, records, entries, target, read, None, cancels(exits), entered, calls, actions
     )
 
 
-def leaves_quietly(exits: Iterable[Node]) -> bool:
-    """Whether leaving these states runs nothing: no behaviour, timer or exit action."""
+def cancels(exits: Iterable[Node]) -> tuple[Node, ...] | None:
+    """Where no exit action runs as these states are left, those with a behaviour or timers to
+    cancel, in exit order (None: an exit action runs)."""
+    found = []
     for state in exits:
-        if state.call is not None or state.timers or state.onexit is not None:
-            return False
-    return True
+        if state.onexit is not None:
+            return None
+        if state.call is not None or state.timers:
+            found.append(state)
+    return tuple(found)
 
 
-def entered_quietly(entries: Iterable[Entry]) -> tuple[Node, ...] | None:
-    """The states of an entry set where entering them runs nothing (None: something runs)."""
+Quiet = tuple[tuple[Node, ...], tuple[Node, ...]] | None  # `entered_quietly`'s
+
+
+def entered_quietly(entries: Iterable[Entry]) -> Quiet:
+    """Where entering the states of an entry set runs nothing (a behaviour only starts after
+    the macrostep), the states and those with a behaviour (None: something runs)."""
     states = []
+    calls = []
     for state, initial, default in entries:
         if (
-            state.call is not None
-            or state.onentry is not None
+            state.onentry is not None
             or state.timers
             or state.kind == "final"
             or initial is not None
@@ -188,7 +219,9 @@ def entered_quietly(entries: Iterable[Entry]) -> tuple[Node, ...] | None:
         ):
             return None
         states.append(state)
-    return tuple(states)
+        if state.call is not None:
+            calls.append(state)
+    return tuple(states), tuple(calls)
 
 
 def _entries(entry: EntrySet) -> tuple[Entry, ...]:
@@ -207,7 +240,7 @@ def _entries(entry: EntrySet) -> tuple[Entry, ...]:
     return tuple(entries)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(eq=False, slots=True)
 class Step:
     """A transition whose domain and entry set read no history node: both are then the same
     in every configuration and under every history, so they are computed once per transition
@@ -218,7 +251,10 @@ class Step:
     scope: Node | None  # its domain: it exits the active states below it (None: all)
     entries: tuple[Entry, ...]
     entered: frozenset[Node]
-    quiet_entries: tuple[Node, ...] | None  # `Plan.entered`
+    quiet: Quiet  # `entered_quietly(entries)`
+    # What each of its plans shares: the transitions taken, their actions (`plan_of`'s)
+    taken: tuple[Transition, ...] = ()
+    actions: tuple[tuple[Action, Node], ...] = ()
 
     @classmethod
     def of(cls, transition: Transition) -> Step | None:
@@ -234,35 +270,55 @@ class Step:
             return None
         entries = _entries(entry)
         states = frozenset(entry.to_enter)
+        taken = (transition,)
+        actions = ((transition.action, transition.source),) if transition.action is not None else ()
+        quiet = entered_quietly(entries)
         return cls(
-            transition, bool(transition.targets), scope, entries, states, entered_quietly(entries)
+            transition, bool(transition.targets), scope, entries, states, quiet, taken, actions
         )
 
-    def plan(self, config: frozenset[Node]) -> Plan:
-        """`make_plan(config, (transition,), history)`, for any history."""
+    def plan(
+        self, config: frozenset[Node], histories: Mapping[Node, tuple[Node, ...]] | None = None
+    ) -> Plan:
+        """`make_plan(config, (transition,), history)`, for any history. `histories`: the
+        history nodes of each state that has some (`Tables.histories`), if known."""
         scope = self.scope
         exits: tuple[Node, ...] = ()
         if self.exits:
-            below = (s for s in config if scope is None or scope in s.ancestors)
+            below = config if scope is None else [s for s in config if scope in s.ancestors]
             exits = tuple(sorted(below, key=document_order, reverse=True))
-        records = tuple(
-            (child, recorded_history(child, state, config))
-            for state in exits
-            for child in state.children
-            if child.kind == "history"
+        if histories is None:
+            histories = {s: found for s in exits if (found := history_children(s))}
+        records = (
+            tuple(
+                (child, recorded_history(child, state, config))
+                for state in exits
+                if state in histories
+                for child in histories[state]
+            )
+            if histories
+            else ()
         )
         target = config.difference(exits) | self.entered
+        entered, calls = self.quiet if self.quiet is not None else (None, ())
         return Plan(
-            (self.transition,),
+            self.taken,
             exits,
             records,
             self.entries,
             target,
             (),
             None,
-            leaves_quietly(exits),
-            self.quiet_entries,
+            cancels(exits),
+            entered,
+            calls,
+            self.actions,
         )
+
+
+def history_children(state: Node) -> tuple[Node, ...]:
+    """The history nodes of a state (they record what it had active when it is left)."""
+    return tuple(child for child in state.children if child.kind == "history")
 
 
 class Configuration:
@@ -274,9 +330,10 @@ class Configuration:
         self.states = states
         self.tables = tables
         self.steps = tables.steps
-        self.atomic = tuple(sorted((n for n in states if n.is_atomic), key=document_order))
+        self.atomic = tuple(sorted([n for n in states if n.is_atomic], key=document_order))
         # looked at after every microstep
-        self.eventless = Selection.of(self.atomic, tables.eventless)
+        eventless = tables.eventless
+        self.eventless = Selection.of(self.atomic, eventless) if eventless else NO_SELECTION
         self.selections: dict[str | None, Selection] = {}
         self.plans: dict[tuple[Transition, ...], Plan] = {}
 
@@ -286,7 +343,12 @@ class Configuration:
         if found is None:
             if len(self.selections) >= ENTRY_LIMIT:
                 self.selections.clear()
-            found = self.selections[name] = Selection.of(self.atomic, self.tables.reactors(name))
+            alone = self.tables.alone.get(name)
+            if alone is not None:  # the same in every configuration where its state is active
+                found = alone[1] if alone[0] in self.states else NO_SELECTION
+            else:
+                found = Selection.of(self.atomic, self.tables.reactors(name))
+            self.selections[name] = found
         return found
 
     def plan(self, enabled: tuple[Transition, ...], history: History) -> Plan:
@@ -302,13 +364,9 @@ class Configuration:
             first = None
         made = None
         if len(enabled) == 1:
-            transition = enabled[0]
-            if transition in self.steps:
-                step = self.steps[transition]
-            else:
-                step = self.steps[transition] = Step.of(transition)
+            step = self.steps.get(enabled[0])  # every transition of the chart has its entry
             if step is not None:
-                made = step.plan(self.states)
+                made = step.plan(self.states, self.tables.histories)
         if made is None:
             made = make_plan(self.states, enabled, history)
         made.other = first
@@ -320,7 +378,17 @@ class Tables:
     """A chart's dispatch tables: the configurations reached so far, interned (engines of the
     same chart share them: a plan depends on nothing an engine has of its own)."""
 
-    __slots__ = ("by_descriptor", "by_name", "configurations", "eventless", "fillers", "steps")
+    __slots__ = (
+        "alone",
+        "by_descriptor",
+        "by_name",
+        "configurations",
+        "eventless",
+        "fillers",
+        "histories",
+        "known",
+        "steps",
+    )
 
     def __init__(self, nodes: Iterable[Node]) -> None:
         self.configurations: dict[frozenset[Node], Configuration] = {}
@@ -328,16 +396,41 @@ class Tables:
         # the chart, so that what reacts to a name is a few look-ups, not a walk of the states.
         self.by_descriptor: dict[str, list[Transition]] = {}
         self.eventless: dict[Node, tuple[Transition, ...]] = {}
+        # Per transition taken alone, its Step (None: it reads history), made here for every
+        # transition (linear in the chart: a first microstep then only computes its exits).
+        self.steps: dict[Transition, Step | None] = {}
+        names: dict[str, None] = {}  # the names the chart itself gives, in document order
+        self.histories: dict[Node, tuple[Node, ...]] = {}  # the states with history nodes
+        above_parallel: set[Node] = set()  # the parallel states and their ancestors
         for node in nodes:
+            if node.kind == "parallel":
+                above_parallel.update(node.lineage)
+            if node.kind == "history" and node.parent is not None:
+                self.histories[node.parent] = history_children(node.parent)
             if node.eventless:
                 self.eventless[node] = node.eventless
             for transition in node.transitions:
+                self.steps[transition] = Step.of(transition)
                 for descriptor in transition.events:
                     self.by_descriptor.setdefault(descriptor, []).append(transition)
-        self.by_name: dict[str, Reactors] = {}
-        # Per transition taken alone, its Step (None: it reads history); as many as the chart
-        # has transitions, so unbounded.
-        self.steps: dict[Transition, Step | None] = {}
+                    if "*" not in descriptor:
+                        names[descriptor] = None
+            if node.call is not None:  # its outcomes arrive as `done.invoke.<id>.<outcome>`
+                for outcome in node.call.outcomes:
+                    names[f"{FINALIZE_PREFIX}{node.id}.{outcome}"] = None
+        self.by_name: dict[str, Reactors] = {}  # other names, as they come (NAME_LIMIT)
+        # What reacts to each name the chart gives (a descriptor, a behaviour's outcome), made
+        # here: as many as the chart has transitions and outcomes, so unbounded.
+        self.known: dict[str, Reactors] = {name: self._reactors(name) for name in names}
+        # Of those, each name only one state reacts to, where no parallel state lies below it
+        # (so an active one has one active atomic state below it): the state and the selection
+        # of the name in any configuration that has the state active.
+        self.alone: dict[str, tuple[Node, Selection]] = {}
+        for name, reactors in self.known.items():
+            if len(reactors) == 1:
+                for owner in reactors:
+                    if owner not in above_parallel:
+                        self.alone[name] = (owner, Selection.of((owner,), reactors))
         self.fillers: dict[str, Callable[[Mapping[str, Any] | None], Record]] = {}
 
     def filler(
@@ -371,17 +464,23 @@ class Tables:
 
     def reactors(self, name: str) -> Reactors:
         """The nodes with transitions that match the event `name`, with those transitions."""
-        found = self.by_name.get(name)
+        found = self.known.get(name)
         if found is None:
-            if len(self.by_name) >= NAME_LIMIT:
-                self.by_name.clear()
-            hits: dict[Node, list[Transition]] = {}
-            for key in descriptor_keys(name):
-                for transition in self.by_descriptor.get(key, ()):
-                    hits.setdefault(transition.source, []).append(transition)
-            found = self.by_name[name] = {}
-            for node, some in hits.items():
-                matching = tuple(t for t in node.transitions if t in some and t.matches(name))
-                if matching:
-                    found[node] = matching
+            found = self.by_name.get(name)
+            if found is None:
+                if len(self.by_name) >= NAME_LIMIT:
+                    self.by_name.clear()
+                found = self.by_name[name] = self._reactors(name)
+        return found
+
+    def _reactors(self, name: str) -> dict[Node, tuple[Transition, ...]]:
+        hits: dict[Node, list[Transition]] = {}
+        for key in descriptor_keys(name):
+            for transition in self.by_descriptor.get(key, ()):
+                hits.setdefault(transition.source, []).append(transition)
+        found = {}
+        for node, some in hits.items():
+            matching = tuple(t for t in node.transitions if t in some and t.matches(name))
+            if matching:
+                found[node] = matching
         return found

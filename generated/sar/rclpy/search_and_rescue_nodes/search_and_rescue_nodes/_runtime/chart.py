@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from .values import (
+    PLAIN,
     Filler,
     Record,
     defaults_maker,
@@ -291,10 +292,14 @@ class Context:
     def field(self, name: str) -> Any:
         """`event.<name>`: a field the current event does not carry is an error (SCXML's
         error.execution; the guard is false), as `$sg.field` in the emitted SCXML."""
-        data = self.event.data if self.event is not None else None
-        if not isinstance(data, Mapping) or name not in data:
-            raise KeyError(f"the event has no field {name!r}")
-        return data[name]
+        event = self.event
+        data = event.data if event is not None else None
+        if type(data) is Record:  # what the engine fills: no ABC check
+            if name in data:
+                return data[name]
+        elif isinstance(data, Mapping) and name in data:
+            return data[name]
+        raise KeyError(f"the event has no field {name!r}")
 
     def opaque(self, language: str, text: str) -> None:
         """Code in a language swarmgen does not execute: recorded, not run."""
@@ -421,8 +426,13 @@ class ChartBuilder:
         internal event `outcome.<id>.<outcome>` when the outcome is declared, so guards and
         effects (where `event.<output>` reads the datum) see the new values, whether or not a
         transition takes the outcome."""
-        # `fill(given, zero)` per output, its template walked once (this runs per outcome)
-        outputs = tuple((output, key, filler(self._zero(key))) for output, key in call.results)
+        # `fill(given, zero)` per output, its template walked once (this runs per outcome);
+        # a plain zero is filled inline (`filler`'s) rather than by a function
+        outputs = tuple(
+            (output, key, zero, None if type(zero) in PLAIN else filler(zero))
+            for output, key in call.results
+            for zero in (self._zero(key),)
+        )
         prefix = f"{FINALIZE_PREFIX}{node.id}."
         # the internal event each declared outcome's `done.invoke` name raises
         raised = {f"{prefix}{o}": f"{OUTCOME_PREFIX}{node.id}.{o}" for o in call.outcomes}
@@ -432,11 +442,18 @@ class ChartBuilder:
             if outputs:
                 data = event.data if event is not None else None
                 given = data if isinstance(data, Record) else Record()
-                for output, key, fill_output in outputs:
-                    ctx.data[key] = fill_output(given.get(output))
+                store = ctx.data
+                for output, key, zero, fill_output in outputs:
+                    value = given.get(output)
+                    if fill_output is not None:
+                        store[key] = fill_output(value)
+                    elif value is None:
+                        store[key] = zero
+                    else:
+                        store[key] = value if type(value) in PLAIN else record(value)
             outcome = raised.get(event.name) if event is not None else None
             if outcome is not None:
-                ctx.raise_event(outcome)
+                ctx._engine.raise_internal(outcome, None)  # `ctx.raise_event`'s
 
         return Transition(node, (prefix[:-1],), (), action=finalize, order=-1)
 
