@@ -112,7 +112,7 @@ class Engine:
             static = selection.static  # `_choose`'s answer where it evaluates and counts nothing
             enabled = self._choose(selection) if static is None or self._bounded else static
             if enabled:
-                self._microstep(enabled)
+                self._microstep(enabled, cfg)
                 now = self._cfg
         # The rest of the macrostep: most events leave nothing eventless or internal to do.
         if now is None or now.eventless.chains or self.internal:
@@ -259,7 +259,7 @@ class Engine:
                 static = selection.static
                 enabled = self._choose(selection) if static is None or self._bounded else static
             if enabled:
-                self._microstep(enabled)
+                self._microstep(enabled, cfg)
         if self._to_invoke:
             self._start_calls()
 
@@ -352,8 +352,8 @@ class Engine:
             self._error(f"step bound in {owner.id}", StepBoundExceeded(message))
         return False
 
-    def _microstep(self, enabled: tuple[Transition, ...]) -> None:
-        cfg = self._cfg or self._configuration()
+    def _microstep(self, enabled: tuple[Transition, ...], cfg: Configuration) -> None:
+        """Take the enabled transitions from `cfg`, the engine's current configuration."""
         plan = cfg.plans.get(enabled)
         if plan is None or plan.read:  # one that depends on history: `plan` picks the one
             plan = cfg.plan(enabled, self.history)
