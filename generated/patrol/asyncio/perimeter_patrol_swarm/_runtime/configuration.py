@@ -89,6 +89,14 @@ class Selection:
 NO_SELECTION = Selection((), ())  # nothing in the configuration reacts
 
 
+def _alone(owner: Node, candidates: tuple[Transition, ...]) -> Selection:
+    """`Selection.of` in a configuration with one atomic state at or below `owner`, the one
+    state whose transitions (`candidates`) react to a name."""
+    first = candidates[0]
+    fixed = first if first.cond is None and not first.bounded else None
+    return Selection(((fixed, ((owner, candidates),)),), None if fixed is None else (fixed,))
+
+
 def descriptor_keys(name: str) -> list[str]:
     """Every descriptor that can match the event `name` (`Transition.matches`): `*`, the name,
     and each prefix that ends before a dot, alone (`a` matches `a.b`) or with `.*`."""
@@ -364,7 +372,11 @@ class Configuration:
             first = None
         made = None
         if len(enabled) == 1:
-            step = self.steps.get(enabled[0])  # every transition of the chart has its entry
+            transition = enabled[0]
+            if transition in self.steps:
+                step = self.steps[transition]
+            else:
+                step = self.steps[transition] = Step.of(transition)
             if step is not None:
                 made = step.plan(self.states, self.tables.histories)
         if made is None:
@@ -396,8 +408,9 @@ class Tables:
         # the chart, so that what reacts to a name is a few look-ups, not a walk of the states.
         self.by_descriptor: dict[str, list[Transition]] = {}
         self.eventless: dict[Node, tuple[Transition, ...]] = {}
-        # Per transition taken alone, its Step (None: it reads history), made here for every
-        # transition (linear in the chart: a first microstep then only computes its exits).
+        # Per transition taken alone, its Step (None: it reads history), made as it is first
+        # taken (a chart's first engine need not pay for transitions no run takes); as many
+        # as the chart has transitions, so unbounded.
         self.steps: dict[Transition, Step | None] = {}
         names: dict[str, None] = {}  # the names the chart itself gives, in document order
         self.histories: dict[Node, tuple[Node, ...]] = {}  # the states with history nodes
@@ -410,7 +423,6 @@ class Tables:
             if node.eventless:
                 self.eventless[node] = node.eventless
             for transition in node.transitions:
-                self.steps[transition] = Step.of(transition)
                 for descriptor in transition.events:
                     self.by_descriptor.setdefault(descriptor, []).append(transition)
                     if "*" not in descriptor:
@@ -419,18 +431,21 @@ class Tables:
                 for outcome in node.call.outcomes:
                     names[f"{FINALIZE_PREFIX}{node.id}.{outcome}"] = None
         self.by_name: dict[str, Reactors] = {}  # other names, as they come (NAME_LIMIT)
-        # What reacts to each name the chart gives (a descriptor, a behaviour's outcome), made
-        # here: as many as the chart has transitions and outcomes, so unbounded.
-        self.known: dict[str, Reactors] = {name: self._reactors(name) for name in names}
-        # Of those, each name only one state reacts to, where no parallel state lies below it
-        # (so an active one has one active atomic state below it): the state and the selection
-        # of the name in any configuration that has the state active.
+        # Per name the chart gives (a descriptor, a behaviour's outcome), made here, linear in
+        # the chart: where only one state reacts to it and no parallel state lies below that
+        # one (so an active one has one active atomic state below it), `alone` has the state
+        # and the name's selection in any configuration that has the state active; else
+        # `known` has what reacts to it.
+        self.known: dict[str, Reactors] = {}
         self.alone: dict[str, tuple[Node, Selection]] = {}
-        for name, reactors in self.known.items():
+        for name in names:
+            reactors = self._reactors(name)
             if len(reactors) == 1:
-                for owner in reactors:
+                for owner, candidates in reactors.items():
                     if owner not in above_parallel:
-                        self.alone[name] = (owner, Selection.of((owner,), reactors))
+                        self.alone[name] = (owner, _alone(owner, candidates))
+            if name not in self.alone:
+                self.known[name] = reactors
         self.fillers: dict[str, Callable[[Mapping[str, Any] | None], Record]] = {}
 
     def filler(
@@ -464,7 +479,7 @@ class Tables:
 
     def reactors(self, name: str) -> Reactors:
         """The nodes with transitions that match the event `name`, with those transitions."""
-        found = self.known.get(name)
+        found = self.known.get(name)  # (a name in `alone` is looked up as any other here)
         if found is None:
             found = self.by_name.get(name)
             if found is None:
