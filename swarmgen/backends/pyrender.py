@@ -210,6 +210,8 @@ class ChartRenderer:
         return self._function("action", lines) if lines else None
 
     def _action_lines(self, action: c.Action) -> list[str]:
+        if isinstance(action, c.Assign) and action.location in expr.SYSTEM_VARIABLES:
+            return [f"ctx.assign_system({action.location!r})"]  # raises: error.execution
         if isinstance(action, c.Assign):
             self._reads_data = True
             # black drops parentheses around a whole right-hand side: printed without them

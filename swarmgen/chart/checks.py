@@ -156,6 +156,7 @@ def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str
 
 def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
     found = {a.location for a in c.flat(actions) if isinstance(a, c.Assign)}
+    found -= expr.SYSTEM_VARIABLES  # read-only: assigning one writes nothing
     for loop in c.flat(actions):
         if isinstance(loop, c.ForEach):
             found |= {loop.item, *([loop.index] if loop.index else [])}

@@ -21,6 +21,7 @@ from dataclasses import replace
 
 from swarmgen.chart.model import Action, Chart, Node, Raise, Transition, flat
 from swarmgen.graphs import strongly_connected
+from swarmgen.names import dot_prefixes
 
 ERROR_EVENT = "error.execution"  # any expression may fail: always counted as raised
 # Past this many spontaneous transitions the pairwise graph would be slow on a hostile chart:
@@ -58,17 +59,6 @@ def raised(actions: Iterable[Action]) -> set[str]:
         for a in flat(tuple(actions))
         if isinstance(a, Raise) and a.delay is None and a.target is None
     }
-
-
-def dot_prefixes(names: Iterable[str]) -> set[str]:
-    """Every name and each of its dot-prefixes (`a.b.c`: `a`, `a.b`, `a.b.c`): a descriptor
-    matches one of `names` exactly when it is in this set, so a chart with thousands of
-    `done.state.*` names is matched in linear time, not names x descriptors."""
-    found: set[str] = set()
-    for name in names:
-        parts = name.split(".")
-        found.update(".".join(parts[: k + 1]) for k in range(len(parts)))
-    return found
 
 
 def matches(descriptor: str, prefixes: set[str]) -> bool:

@@ -177,7 +177,7 @@ def _actions(
     found: list[Diagnostic] = []
     for action in expr.flat(actions):
         if isinstance(action, expr.Assign):
-            if action.target not in scope:
+            if action.target not in scope and action.target not in expr.SYSTEM_VARIABLES:
                 found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue

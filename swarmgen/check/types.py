@@ -239,7 +239,7 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
     if isinstance(action, expr.Assign):
         target = typer.scope.names.get(action.target)
         value = typer.infer(action.value)
-        if not _compatible(target, value):
+        if action.target not in expr.SYSTEM_VARIABLES and not _compatible(target, value):
             typer.errors.append(
                 f"'{action.target}' is {_word(target or '')}, assigned {_word(value or '')}"
             )

@@ -8,6 +8,7 @@ from swarmgen.expr.errors import error_at
 from swarmgen.expr.lex import Tok
 from swarmgen.expr.parse import _Parser, _show_tok
 from swarmgen.expr.tree import (
+    EVENT_NAME,
     RESERVED,
     Action,
     Arg,
@@ -209,10 +210,7 @@ class _StatementParser(_Parser):
 
     def event_action(self) -> Raise | Send:
         verb = self.advance()
-        name = self.peek()
-        if name.kind != "word":
-            self.fail(name, f"expected an event name after '{verb.text}'")
-        self.advance()
+        name = self.event_name(verb)
         args = self.arguments() if self.is_op("(", self.peek()) else ()
         target = None
         if self.is_word("to", self.peek()) and verb.text == "raise":
@@ -221,8 +219,8 @@ class _StatementParser(_Parser):
         after = self.peek()
         if not self.is_word("after", after):
             if verb.text == "raise":
-                return Raise(event=name.text, args=args, target=target)
-            return Send(event=name.text, args=args)
+                return Raise(event=name, args=args, target=target)
+            return Send(event=name, args=args)
         if verb.text != "raise":
             self.fail(
                 after,
@@ -239,7 +237,21 @@ class _StatementParser(_Parser):
                 self.fail(tok, "expected a send id after 'as'", hint="`raise e after 1 s as t`")
             self.advance()
             sendid = tok.text
-        return Raise(event=name.text, args=args, delay=delay, sendid=sendid, target=target)
+        return Raise(event=name, args=args, delay=delay, sendid=sendid, target=target)
+
+    def event_name(self, verb: Tok) -> str:
+        """The event after `raise`/`send`: a name, or W3C's dotted tokens written without blanks
+        (`foo.bar`, `In-s11p112`), whatever tokens the lexer made of them."""
+        first = self.peek()
+        if first.kind != "word":
+            self.fail(first, f"expected an event name after '{verb.text}'")
+        found = EVENT_NAME.match(self.text, first.offset)
+        end = found.end() if found is not None else first.offset + len(first.text)
+        while self.peek().kind != "eof" and self.peek().offset < end:
+            tok = self.advance()
+            if tok.offset + len(tok.text) > end:  # `e-1e+5`: a number runs past the name
+                self.fail(tok, f"expected an event name after '{verb.text}'")
+        return self.text[first.offset : end]
 
     def delay(self) -> Delay:
         """`after <amount> ms|s`, or `after <amount>` with a duration string's value."""

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Collection, Iterable, Iterator
 from typing import Annotated, Any, Literal
 
@@ -60,6 +61,19 @@ def _data_name(value: str) -> str:
 
 
 Ident = Annotated[str, AfterValidator(_ident)]
+
+# An event's name in `raise`/`send`: a name, or W3C's dotted tokens (`foo.bar`, `In-s11p112`:
+# letters, digits, `_` and `-`), read as one by the statement parser (`statements`)
+EVENT_NAME = re.compile(r"(?!__)[^\W\d][\w-]*(?:\.[\w-]+)*")
+
+
+def _event_name(value: str) -> str:
+    if EVENT_NAME.fullmatch(value) is None:
+        raise ValueError(f"{value!r} is not an event name")
+    return value
+
+
+EventName = Annotated[str, AfterValidator(_event_name)]
 DataName = Annotated[str, AfterValidator(_data_name)]
 
 
@@ -204,11 +218,21 @@ def _unique_args(args: tuple[Arg, ...]) -> tuple[Arg, ...]:
     return args
 
 
+def _location(value: str) -> str:
+    return value if value in SYSTEM_VARIABLES else _data_name(value)
+
+
+# what an assignment may name: member data, or a system variable (read-only: W3C's
+# error.execution when the assignment runs, docs/semantics.md)
+Location = Annotated[str, AfterValidator(_location)]
+
+
 class Assign(_Model):
-    """``name = expr``: set a member data item."""
+    """``name = expr``: set a member data item. To a system variable (`_sessionid = e`) it
+    sets nothing and raises error.execution when it runs (W3C 5.10: they are read-only)."""
 
     kind: Literal["assign"] = "assign"
-    target: DataName
+    target: Location
     value: Operand
 
 
@@ -229,7 +253,7 @@ class Raise(_Model):
     `<send>` to the session's own external queue), cancellable by its send id."""
 
     kind: Literal["raise"] = "raise"
-    event: Ident
+    event: EventName
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
     delay: Delay | None = None
     sendid: Ident | None = None  # `as <name>`: what `cancel <name>` names
@@ -242,7 +266,7 @@ class Send(_Model):
     """Send an event to the swarm."""
 
     kind: Literal["send"] = "send"
-    event: Ident
+    event: EventName
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
 
 

@@ -203,11 +203,13 @@ class Actions:
             )
             if value is None and not len(node) and (node.text or "").strip():
                 value = (node.text or "").strip()  # inline content: an expression's text
-            if location in expr.SYSTEM_VARIABLES:
-                why = "system variables are read-only: swarmgen refuses the assignment when it compiles (W3C: error.execution when it runs)"
+            if location in expr.SYSTEM_VARIABLES and tag == "data":
+                why = "a system variable is no data id"
                 self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why=why)
                 return []
             text = self.text(str(value), node) if value is not None else None
+            if location in expr.SYSTEM_VARIABLES:  # read-only: error.execution when it runs
+                return [f"{location} = {text}"] if text is not None else []
             if value is None or not location.isidentifier():
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,

@@ -217,6 +217,11 @@ class Context:
         """A system variable (`_event`, `_sessionid`, `_name`, `_ioprocessors`; W3C 5.10)."""
         return self._engine.system_variable(name, self.event)
 
+    def assign_system(self, name: str) -> None:
+        """`_sessionid = e`: system variables are read-only (W3C 5.10), so the assignment
+        fails: the engine raises error.execution and the rest of the block is skipped."""
+        raise AttributeError(f"the system variable {name} is read-only")
+
     def is_active(self, node_id: str) -> bool:
         """`In(state)`: whether the state is active."""
         return bool(self._engine.is_active(node_id))
