@@ -189,7 +189,10 @@ def _cycle(
         wanted.setdefault(product.observer.label(graph.steps[graph.step[found[2]]]), found)
     steps: list[Step] = []
     here = entry
-    for source, target, index in wanted.values():
+    label = product.observer.label
+    for taken, (source, target, index) in wanted.items():
+        if any(label(step) == taken for step in steps):
+            continue  # the way to an earlier label's edge took one of this label already
         steps += _inside(product, component, here, source)
         steps.append(graph.steps[graph.step[index]])
         here = target
