@@ -280,6 +280,8 @@ class Transitions(Context):
                         c.Delay(delay.amount, delay.unit) if delay is not None else None,
                         action.sendid,
                         action.target,
+                        action.via,
+                        self._data_ident(action.into) if action.into is not None else None,
                     )
                 )
             else:

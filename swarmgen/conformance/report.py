@@ -91,6 +91,7 @@ def markdown(content: Mapping[str, Any]) -> str:
         "",
         *_features(rows),
         "",
+        *_unexpressed(rows),
         *_semantics(rows),
         "## Results",
         "",
@@ -168,6 +169,38 @@ def _features(rows: Mapping[str, Mapping[str, Any]]) -> list[str]:
     for name in order:
         lines.append(f"| {_cell(name)} | {first[name]} | {alone[name]} | {anywhere[name]} |")
     return lines
+
+
+# Tests that check ECMAScript's `undefined` (`typeof x === 'undefined'`): the decision, per test,
+# of what swarmgen's typed datamodel makes of them (docs/semantics.md, "The value rule")
+_UNDEFINED = (
+    "swarmgen's datamodel has no `undefined`: every datum and event field always holds a typed "
+    "value (the value rule)"
+)
+_NO_DATA = (
+    "an event without data has `_event.data` = `{}`, which no expression can test (data-type "
+    "values do not compare: SG208); what the test wants first, error.execution before the done "
+    'event, is swarmgen\'s too (docs/semantics.md, "Final states and done data")'
+)
+UNEXPRESSED = {
+    "277": f"{_UNDEFINED}, so a `<data>` whose expression fails holds its zero, not an unbound "
+    "value; meaningless for it",
+    "280": f'{_UNDEFINED}, and every datum exists from the start (`binding="late"` is SG060); '
+    "meaningless for it",
+    "528": f"{_UNDEFINED}; {_NO_DATA}",
+    "343": f"{_UNDEFINED}; {_NO_DATA}",
+    "488": f"{_UNDEFINED}; {_NO_DATA}",
+    "445": f"{_UNDEFINED}: a datum declared without a value holds 0; meaningless for it",
+}
+
+
+def _unexpressed(rows: Mapping[str, Mapping[str, Any]]) -> list[str]:
+    """The tests of ECMAScript's `undefined` that swarmgen does not run, and why (decided)."""
+    found = [t for t in UNEXPRESSED if rows.get(t, {}).get("swarmgen") == "not-run"]
+    if not found:
+        return []
+    lines = ["## Tests of `undefined` (typeof)", ""]
+    return [*lines, *(f"- {t}: {UNEXPRESSED[t]}." for t in found), ""]
 
 
 def _semantics(rows: Mapping[str, Mapping[str, Any]]) -> list[str]:

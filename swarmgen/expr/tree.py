@@ -260,6 +260,10 @@ class Raise(_Model):
     # `to <expr>`: W3C's <send target>: this member's session (`"#_scxml_" + _sessionid`), or
     # `"#_internal"`; another session is error.communication, anything else error.execution
     target: Operand | None = None
+    # `via <expr>`: W3C's <send type|typeexpr>: the SCXML event processor (its URI or "scxml")
+    # is the only one; any other value is error.execution and nothing is sent
+    via: Operand | None = None
+    into: DataName | None = None  # `into <datum>`: W3C's idlocation, the generated send id
 
 
 class Send(_Model):
@@ -477,10 +481,13 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     amount = rewrite(delay.amount) if delay is not None else None
     given = action.target if isinstance(action, Raise) else None
     target = rewrite(given) if given is not None else None
+    given_via = action.via if isinstance(action, Raise) else None
+    via = rewrite(given_via) if given_via is not None else None
     if (
         all(v is a.value for v, a in zip(values, action.args, strict=True))
         and (delay is None or amount is delay.amount)
         and target is given
+        and via is given_via
     ):
         return action
     args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
@@ -488,7 +495,15 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
         return Send(event=action.event, args=args)
     if delay is not None and amount is not None:
         delay = Delay(amount=amount, unit=delay.unit)
-    return Raise(event=action.event, args=args, delay=delay, sendid=action.sendid, target=target)
+    return Raise(
+        event=action.event,
+        args=args,
+        delay=delay,
+        sendid=action.sendid,
+        target=target,
+        via=via,
+        into=action.into,
+    )
 
 
 def action_exprs(action: Action) -> tuple[Expr, ...]:
@@ -513,6 +528,8 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
         found = (action.delay.amount, *found)
     if isinstance(action, Raise) and action.target is not None:
         found = (action.target, *found)
+    if isinstance(action, Raise) and action.via is not None:
+        found = (action.via, *found)
     return found
 
 

@@ -281,6 +281,17 @@ class Context:
         """`raise e to target [after ...]`: W3C's `<send target>` (Engine.raise_targeted)."""
         self._engine.raise_targeted(name, data, target, delay_ms, sendid)
 
+    def raise_via(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None,
+        options: tuple[Any, Any, str | None, Any],
+        into: str | None = None,
+    ) -> None:
+        """`raise e [to t] via p [after d] [into v]`, options (target, delay_ms, sendid, via):
+        W3C's `<send type|typeexpr idlocation>` (Engine.raise_through)."""
+        self._engine.raise_through(name, data, options, into)
+
     def cancel(self, sendid: Any) -> None:
         """`cancel id` / `cancel (expr)`: the pending delayed events raised as that send id
         never arrive; a computed id that is no string is an error (error.execution)."""
