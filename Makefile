@@ -82,9 +82,11 @@ typecheck-bare: pyproject.toml
 # reference corpus when it is absent (tests/skips.py; SWARMGEN_REFERENCE_DIR points to it).
 # Two xdist workers, a test file at a time, longest files first (tests/conftest.py): much of the
 # suite waits on subprocesses (Qt, ROS 2 discovery, cmake), so two workers overlap the waits.
+# Then the tests marked `alone` (the detailed world's lockstep runs), with nothing beside them.
 PYTEST_WORKERS ?= 2
 pytest: $(STAMP) $(ROS_STAMP) $(STUDY_STAMP) sysdeps
-	SWARMGEN_STRICT_SKIPS=1 $(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile --no-loadscope-reorder
+	SWARMGEN_STRICT_SKIPS=1 $(BIN)/pytest -q -n $(PYTEST_WORKERS) --dist loadfile --no-loadscope-reorder -m "not alone"
+	SWARMGEN_STRICT_SKIPS=1 $(BIN)/pytest -q -m alone
 
 ## golden: rewrite the golden files after reviewing the diff
 golden: $(STAMP)

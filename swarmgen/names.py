@@ -50,6 +50,42 @@ def identifier(name: str, fallback: str = "unnamed") -> str:
     return text
 
 
+# W3C SCXML event names: tokens of ASCII letters, digits, `_` and `-` separated by dots (a
+# transition's descriptor `a.b` takes `a.b` and `a.b.c`, by whole tokens: docs/semantics.md).
+_EVENT_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_-]*(?:\.[A-Za-z0-9_-]+)*", re.ASCII)
+# the platform's own first tokens: a model event named `done.x` would be matched by `done.*`
+_PLATFORM_TOKENS = frozenset({"done", "error", "outcome", "after"})
+
+
+def event_name(name: str) -> str:
+    """The name an event has at run time, in descriptors, on the wire and in every output: the
+    model's name when it is a dotted W3C event name (`foo.bar`, `In-s11p112`), else its
+    identifier (`Select Rover` -> `Select_Rover`; a plain name keeps its identifier, so `done` is
+    `done_`). A name whose first token is the platform's (`done.x`, `error.x`) is made an
+    identifier too, so a model event never matches a platform descriptor. The one mapping from
+    an event's model name to its run-time name; it is never used as code, only as a string."""
+    if (
+        ("." in name or "-" in name)
+        and len(name) <= MAX_LENGTH
+        and not name.startswith("__")
+        and _EVENT_NAME.fullmatch(name)
+        and name.split(".", 1)[0] not in _PLATFORM_TOKENS
+    ):
+        return name
+    return identifier(name)
+
+
+def dot_prefixes(names: Iterable[str]) -> set[str]:
+    """Every name and each of its dot-prefixes (`a.b.c`: `a`, `a.b`, `a.b.c`): a descriptor
+    matches one of `names` exactly when it is in this set, so a chart with thousands of
+    `done.state.*` names is matched in linear time, not names x descriptors."""
+    found: set[str] = set()
+    for name in names:
+        parts = name.split(".")
+        found.update(".".join(parts[: k + 1]) for k in range(len(parts)))
+    return found
+
+
 def qualified(*parts: str) -> str:
     """Join identifiers of nested elements: `Mission__SarBehavior__Idle`."""
     return "__".join(p for p in parts if p)

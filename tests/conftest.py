@@ -52,7 +52,6 @@ QT_SCRIPT = ROOT / "swarmgen" / "scxml" / "qt_script.py"
 SLOW_FIRST = (
     "test_hostile_output.py",
     "test_equivalence.py",
-    "test_detailed_e2e.py",
     "test_colcon.py",
     "test_ros_declared.py",
     "test_bad_input.py",

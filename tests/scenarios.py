@@ -14,6 +14,9 @@ the corners of the semantics (`ScenarioMaker.edge_scenarios`):
 - submachine completion: a submachine state run to its final state by its behaviours' outcomes;
 - mixed bursts: a behaviour's outcome queued back to back with a swarm or station event, and
   the outcomes of two parallel behaviours together.
+- descriptor names: every transition on an event, reached by the shortest known prefix, given
+  a longer name its descriptor matches by W3C's token prefix (`e.more`, with the event's data)
+  and one that only shares its text (`ex`, matched by nothing), then one more step;
 - near livelocks: every input that runs the transitions of a potential microstep cycle (the
   step bound's, docs/semantics.md), alone, twice back to back, and followed by noise (each
   external event starts the bound's count again).
@@ -56,6 +59,7 @@ ARITHMETIC = frozenset({"+", "-", "*", "/", "%"})
 OUTCOME_PREFIXES = ("outcome.", "done.invoke.")
 UNDECLARED_OUTCOME = "unplanned"  # an outcome no behaviour declares
 FAMILY_LIMIT = 40  # scenarios per family and chart at most
+DESCRIPTOR_LIMIT = 4  # descriptor names per chart: the matching rule is one, not per transition
 UNSET_FIELD = 0.2  # chance a data type's field is left out of a generated value
 
 
@@ -714,6 +718,25 @@ class ScenarioMaker:
                             scenarios += [self._tail([*prefix, v]) for v in variants]
         return _limit(scenarios, self.rng)
 
+    def descriptor_names(self) -> list[Scenario]:
+        """Every evented transition's descriptor `e` from its source: `e.more` (taken: a
+        descriptor matches the names it is a token prefix of) and `ex` (not taken)."""
+        scenarios: list[Scenario] = []
+        done: set[tuple[str, str]] = set()
+        for node in self.chart.walk():
+            for transition in node.transitions:
+                for event in transition.events:
+                    if event not in self.event_names or (node.id, event) in done:
+                        continue
+                    done.add((node.id, event))
+                    prefix = self.reach(node.id)
+                    if prefix is None:
+                        continue
+                    data = self.event_step(event)["data"]
+                    for name in (f"{event}.more", f"{event}x"):
+                        scenarios.append(self._tail([*prefix, {"event": name, "data": data}]))
+        return _limit(scenarios, self.rng, DESCRIPTOR_LIMIT)
+
     def _trigger_variants(self, node: c.Node, event: str) -> list[tuple[str, list[Step]]]:
         for prefix in OUTCOME_PREFIXES:
             if event.startswith(prefix):
@@ -883,6 +906,7 @@ class ScenarioMaker:
             *self.history_reentry(),
             *self.submachine_completion(),
             *self.mixed_bursts(),
+            *self.descriptor_names(),
             *self.near_livelocks(),
         ]
 
@@ -920,11 +944,13 @@ def _unique_lists(scenarios: list[Scenario]) -> list[Scenario]:
     return found
 
 
-def _limit(scenarios: list[Scenario], rng: random.Random) -> list[Scenario]:
+def _limit(
+    scenarios: list[Scenario], rng: random.Random, limit: int = FAMILY_LIMIT
+) -> list[Scenario]:
     scenarios = _unique_lists(scenarios)
-    if len(scenarios) <= FAMILY_LIMIT:
+    if len(scenarios) <= limit:
         return scenarios
-    keep = sorted(rng.sample(range(len(scenarios)), FAMILY_LIMIT))
+    keep = sorted(rng.sample(range(len(scenarios)), limit))
     return [scenarios[i] for i in keep]
 
 

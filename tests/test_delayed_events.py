@@ -183,7 +183,7 @@ def test_verify_explores_delayed_raises_and_their_cancellation(tmp_path: Path) -
     model.write_text(stuck, encoding="utf-8")
     result = run.verify(model, Budget())
     found = [f.diagnostic.message for f in result.findings]
-    assert found == ["deadlock: UAV_1 in Late can never move again (shortest trace: 4 step(s))"]
+    assert found == ["deadlock: UAV_1 in Late can never move again (shortest trace: 5 step(s))"]
 
 
 def test_simulate_delivers_delayed_raises_in_ticks(tmp_path: Path) -> None:

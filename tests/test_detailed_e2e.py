@@ -25,6 +25,9 @@ import psutil
 from tests.conftest import ROOT
 from tests.hostile import swarmgen
 
+# lockstep runs whose step counts must agree: `make test` runs them with nothing beside them
+pytestmark = pytest.mark.alone
+
 SAR = ROOT / "sample_models" / "sar" / "sar.xmi"
 SMALL = ROOT / "tests" / "fixtures" / "detailed" / "small_sar.json"
 # ROS domains of this test run's detailed runs: apart from the runner's default (140-199), which

@@ -2,7 +2,7 @@
 scenarios (seeded walks, abort in the middle of every state reached, behaviour failures,
 inputs arriving back to back, and the edge families of tests/scenarios.py: outputs read by
 guards, outcomes no transition takes, history re-entry, submachine completion, mixed bursts,
-guards that raise), the generated Python backends give exactly the trace of the emitted SCXML
+guards that raise, names a descriptor matches by token prefix and names it does not), the generated Python backends give exactly the trace of the emitted SCXML
 run in Qt SCXML (an independent engine). A sample of those scenarios also runs on real rclpy.
 
 The firewatch model (tests/fixtures/models/firewatch.xmi, written by make_firewatch.py) is the
@@ -91,6 +91,7 @@ def _families(model: Path, member: str) -> dict[str, list[list[dict[str, Any]]]]
         "history_reentry": maker.history_reentry(),
         "submachine_completion": maker.submachine_completion(),
         "mixed_bursts": maker.mixed_bursts(),
+        "descriptor_names": maker.descriptor_names(),
     }
 
 
@@ -150,6 +151,7 @@ def _rclpy_sample(model: Path, member: str) -> list[list[dict[str, Any]]]:
         "untaken_outcomes",
         "history_reentry",
         "mixed_bursts",
+        "descriptor_names",
         "submachine_completion",
         "failures",
         "walks",

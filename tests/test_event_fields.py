@@ -50,7 +50,7 @@ def test_the_language_reads_system_variables() -> None:
     value = expr.parse_expr("_event.name == _name and _event.data == _ioprocessors")
     assert expr.to_text(value) == "_event.name == _name and _event.data == _ioprocessors"
     assert expr.free_names(value) == frozenset()  # no member data
-    for bad in ("_event", "_event.foo", "_name = 1"):
+    for bad in ("_event", "_event.foo", "_name.x = 1"):  # `_name = 1`: tests/test_system_assign.py
         with pytest.raises(expr.ExprError):
             expr.parse_actions(bad) if "=" in bad else expr.parse_expr(bad)
 

@@ -288,7 +288,7 @@ ERRORS: list[tuple[Callable[[str], object], str, str, int, str | None]] = [
     (parse_actions, "x = 1 = 2", "`==` expected, `=` is assignment", 6, None),
     (parse_actions, "raise", "expected an event name after 'raise'", 5, None),
     (parse_actions, "send (x)", "expected an event name after 'send'", 5, None),
-    (parse_actions, "raise e.x", "unexpected token '.'", 7, None),
+    (parse_actions, "raise e .x", "unexpected token '.'", 8, None),
     (parse_actions, "raise e(a = 1, a = 2)", "duplicate argument 'a'", 15, None),
     (parse_actions, "raise e(1)", "expected an argument `name = expression`, found '1'", 8, None),
     (parse_actions, "raise e(a)", "expected '=' after argument name 'a'", 9, "field = expression"),

@@ -121,8 +121,13 @@ BAD = {
     "else-outside-if": (_doc('<state id="A"><onentry><else/></onentry></state>'), "SG060", 2),
     "invoke": (_doc('<state id="A"><invoke type="http"/></state>'), "SG060", 2),
     "script": (_doc('<script>x = 1;</script>\n<state id="A"/>'), "SG060", 2),
-    "send-other-processor": (
-        _doc('<state id="A"><onentry><send event="e" type="http://a/b"/></onentry></state>'),
+    "send-http-processor": (  # another type is read: error.execution when it runs
+        _doc('<state id="A"><onentry><send event="e" type="basichttp"/></onentry></state>'),
+        "SG060",
+        2,
+    ),
+    "send-idlocation-and-id": (
+        _doc('<state id="A"><onentry><send event="e" id="t" idlocation="v"/></onentry></state>'),
         "SG060",
         2,
     ),

@@ -66,8 +66,9 @@ def test_leads_to_violated_after_a_preemption_is_a_lasso(tmp_path: Path) -> None
     assert result.exit_code == run.VIOLATED
     assert codes(result) == ["SG407"]
     trace = finding(result, "SG407")
-    # launch, taken, preempted; then the cycle, fair: Hover ends with each of its outcomes
-    assert trace.loop == 3 and trace.length == 6
+    # launch, taken, preempted (queued, taken); then the cycle, fair: Hover ends with each of
+    # its outcomes, each queued and taken
+    assert trace.loop == 4 and trace.length == 10
     assert trace.scenarios["UAV_1"][1:] == [
         {"complete": "TakeOff", "outcome": "preempted", "outputs": {}, "state": "Up"},
         *(

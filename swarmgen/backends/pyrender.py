@@ -210,6 +210,8 @@ class ChartRenderer:
         return self._function("action", lines) if lines else None
 
     def _action_lines(self, action: c.Action) -> list[str]:
+        if isinstance(action, c.Assign) and action.location in expr.SYSTEM_VARIABLES:
+            return [f"ctx.assign_system({action.location!r})"]  # raises: error.execution
         if isinstance(action, c.Assign):
             self._reads_data = True
             # black drops parentheses around a whole right-hand side: printed without them
@@ -218,6 +220,8 @@ class ChartRenderer:
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
             data = data if action.params else "None"
+            if isinstance(action, c.Raise) and (action.via is not None or action.into is not None):
+                return [self._through(action, data)]
             if isinstance(action, c.Raise) and action.target is not None:
                 target = _unwrap(self.py(action.target))
                 ms = self._delay_ms(action.delay) if action.delay is not None else "0"
@@ -266,6 +270,15 @@ class ChartRenderer:
         """`raise e after ...` with its delay in milliseconds."""
         ms = self._delay_ms(delay)
         return f"ctx.raise_later({action.event!r}, {data}, {ms}, {action.sendid!r})"
+
+    def _through(self, action: c.Raise, data: str) -> str:
+        """`raise e ... via p` / `into v`: ctx.raise_via (the engine writes the send id to
+        `v`, also when the send fails)."""
+        target = _unwrap(self.py(action.target)) if action.target is not None else "None"
+        ms = self._delay_ms(action.delay) if action.delay is not None else "None"
+        via = _unwrap(self.py(action.via)) if action.via is not None else "None"
+        options = f"({target}, {ms}, {action.sendid!r}, {via})"
+        return f"ctx.raise_via({action.event!r}, {data}, {options}, {action.into!r})"
 
     def _delay_ms(self, delay: c.Delay) -> str:
         """A delay as Python computing milliseconds."""

@@ -146,8 +146,14 @@ def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str
         elif isinstance(action, c.ForEach):
             read |= _names(action.array, ids)
         elif isinstance(action, c.Raise | c.Send):
-            if isinstance(action, c.Raise) and action.delay is not None:
-                read |= _names(action.delay.amount, ids)
+            if isinstance(action, c.Raise):
+                computed = (
+                    action.delay.amount if action.delay else None,
+                    action.target,
+                    action.via,
+                )
+                for value in computed:
+                    read |= _names(value, ids) if value is not None else set()
             for param in action.params:
                 if not isinstance(param.value, c.FieldDefault):
                     read |= _names(param.value, ids)
@@ -156,9 +162,12 @@ def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str
 
 def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
     found = {a.location for a in c.flat(actions) if isinstance(a, c.Assign)}
+    found -= expr.SYSTEM_VARIABLES  # read-only: assigning one writes nothing
     for loop in c.flat(actions):
         if isinstance(loop, c.ForEach):
             found |= {loop.item, *([loop.index] if loop.index else [])}
+        if isinstance(loop, c.Raise) and loop.into is not None:
+            found.add(loop.into)
     return found
 
 

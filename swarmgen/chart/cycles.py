@@ -20,6 +20,8 @@ from collections.abc import Iterable, Sequence
 from dataclasses import replace
 
 from swarmgen.chart.model import Action, Chart, Node, Raise, Transition, flat
+from swarmgen.graphs import strongly_connected
+from swarmgen.names import dot_prefixes
 
 ERROR_EVENT = "error.execution"  # any expression may fail: always counted as raised
 # Past this many spontaneous transitions the pairwise graph would be slow on a hostile chart:
@@ -57,17 +59,6 @@ def raised(actions: Iterable[Action]) -> set[str]:
         for a in flat(tuple(actions))
         if isinstance(a, Raise) and a.delay is None and a.target is None
     }
-
-
-def dot_prefixes(names: Iterable[str]) -> set[str]:
-    """Every name and each of its dot-prefixes (`a.b.c`: `a`, `a.b`, `a.b.c`): a descriptor
-    matches one of `names` exactly when it is in this set, so a chart with thousands of
-    `done.state.*` names is matched in linear time, not names x descriptors."""
-    found: set[str] = set()
-    for name in names:
-        parts = name.split(".")
-        found.update(".".join(parts[: k + 1]) for k in range(len(parts)))
-    return found
 
 
 def matches(descriptor: str, prefixes: set[str]) -> bool:
@@ -309,41 +300,6 @@ class _Graph:
 
 
 def _components(group: set[int], edges: list[set[int]]) -> list[set[int]]:
-    """Strongly connected components of the graph restricted to `group` (iterative Tarjan)."""
-    index: dict[int, int] = {}
-    low: dict[int, int] = {}
-    on_stack: set[int] = set()
-    stack: list[int] = []
-    found: list[set[int]] = []
-    for root in sorted(group):
-        if root in index:
-            continue
-        work: list[tuple[int, list[int]]] = [(root, sorted(edges[root] & group))]
-        index[root] = low[root] = len(index)
-        stack.append(root)
-        on_stack.add(root)
-        while work:
-            node, pending = work[-1]
-            if pending:
-                nxt = pending.pop()
-                if nxt not in index:
-                    index[nxt] = low[nxt] = len(index)
-                    stack.append(nxt)
-                    on_stack.add(nxt)
-                    work.append((nxt, sorted(edges[nxt] & group)))
-                elif nxt in on_stack:
-                    low[node] = min(low[node], index[nxt])
-                continue
-            work.pop()
-            if work:
-                low[work[-1][0]] = min(low[work[-1][0]], low[node])
-            if low[node] == index[node]:
-                component = set()
-                while True:
-                    member = stack.pop()
-                    on_stack.discard(member)
-                    component.add(member)
-                    if member == node:
-                        break
-                found.append(component)
-    return found
+    """Strongly connected components of the graph restricted to `group`: roots in ascending
+    order, each node's successors in descending order (the order these analyses report in)."""
+    return strongly_connected(sorted(group), lambda node: sorted(edges[node] & group, reverse=True))

@@ -65,6 +65,8 @@ def _action_exprs(action: c.Action) -> list[expr.Expr]:
             found.append(action.delay.amount)
         if isinstance(action, c.Raise) and action.target is not None:
             found.append(action.target)
+        if isinstance(action, c.Raise) and action.via is not None:
+            found.append(action.via)
         return found
     return []
 
@@ -115,6 +117,7 @@ def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action
         if isinstance(action, c.Raise):
             delay = replace(action.delay, amount=fix(action.delay.amount)) if action.delay else None
             target = fix(action.target) if action.target is not None else None
-            return replace(action, params=params, delay=delay, target=target)
+            via = fix(action.via) if action.via is not None else None
+            return replace(action, params=params, delay=delay, target=target, via=via)
         return replace(action, params=params)
     return action

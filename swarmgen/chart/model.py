@@ -55,6 +55,8 @@ class Raise:
     delay: Delay | None = None
     sendid: str | None = None
     target: expr.Expr | None = None  # W3C's <send target> (docs/semantics.md, "Targets")
+    via: expr.Expr | None = None  # W3C's <send type|typeexpr> (docs/semantics.md, "Targets")
+    into: str | None = None  # the datum (id) W3C's idlocation writes the generated send id to
 
 
 @dataclass(frozen=True, slots=True)

@@ -17,7 +17,7 @@ from swarmgen.ir.nodes import (
     Vertex,
 )
 from swarmgen.ir.query import connection_owner
-from swarmgen.names import identifier
+from swarmgen.names import event_name, identifier
 
 
 def cond(guard: expr.Expr | None) -> expr.Expr | None:
@@ -106,7 +106,7 @@ class Transitions(Context):
         if trigger.kind in (TriggerKind.ERROR, TriggerKind.DONE):
             return trigger.name  # done.state.<name>: the state's id by `chart.instates`
         event = self.index.events.get(trigger.event or "")
-        return event.ident if event is not None else identifier(trigger.name)
+        return event.ident if event is not None else event_name(trigger.name)
 
     def _joins(self, copy: Copy, state: State) -> list[c.Transition]:
         found = []
@@ -232,7 +232,7 @@ class Transitions(Context):
 
     def _event_ident(self, name: str) -> str:
         event = self.index.events_by_name.get(name)
-        return event.ident if event is not None else identifier(name)
+        return event.ident if event is not None else event_name(name)
 
     def _actions(
         self,
@@ -245,7 +245,10 @@ class Transitions(Context):
             if outputs:
                 action = _read_outputs(action, outputs)
             if isinstance(action, expr.Assign):
-                lowered.append(c.Assign(self._data_ident(action.target), action.value))
+                target = action.target  # a system variable keeps its name (read-only)
+                if target not in expr.SYSTEM_VARIABLES:
+                    target = self._data_ident(target)
+                lowered.append(c.Assign(target, action.value))
                 continue
             if isinstance(action, expr.Cancel):
                 lowered.append(c.Cancel(action.sendid, action.expr))
@@ -277,6 +280,8 @@ class Transitions(Context):
                         c.Delay(delay.amount, delay.unit) if delay is not None else None,
                         action.sendid,
                         action.target,
+                        action.via,
+                        self._data_ident(action.into) if action.into is not None else None,
                     )
                 )
             else:

@@ -8,6 +8,7 @@ from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model, State, TriggerKind
 from swarmgen.ir.query import ModelIndex, outgoing, walk
+from swarmgen.names import dot_prefixes
 
 # `preempted` ends a behaviour only because its state is being left: nobody waits for it.
 _UNWAITED = {"preempted"}
@@ -33,16 +34,19 @@ def check_events(model: Model) -> list[Diagnostic]:
     station = {e.name for e in model.events if e.sender == "station"}
     triggered: dict[str, list[object]] = {}
     found: list[Diagnostic] = []
+    heard = dot_prefixes(sent | station)
     for machine in model.machines:
         for transition in machine.transitions:
             for trigger in transition.triggers:
                 if trigger.kind != TriggerKind.EVENT:
                     continue
                 triggered.setdefault(trigger.name, []).append(trigger)
-                if trigger.name not in sent and trigger.name not in station:
+                if trigger.name not in heard:
                     found.append(dg.NEVER_SENT.at(trigger.span, event=trigger.name))
     for event in model.events:
-        if (event.name in sent or event.name in station) and event.name not in triggered:
+        if (event.name in sent or event.name in station) and not (
+            dot_prefixes({event.name}) & triggered.keys()
+        ):
             found.append(dg.NEVER_HANDLED.at(event.span, event=event.name))
     return found
 

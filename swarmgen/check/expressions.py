@@ -177,7 +177,7 @@ def _actions(
     found: list[Diagnostic] = []
     for action in expr.flat(actions):
         if isinstance(action, expr.Assign):
-            if action.target not in scope:
+            if action.target not in scope and action.target not in expr.SYSTEM_VARIABLES:
                 found.append(_unknown_name(span, "assigns", what, action.target, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
@@ -195,6 +195,8 @@ def _actions(
             for target in (action.item, action.index):
                 if target is not None and target not in scope:
                     found.append(_unknown_name(span, "assigns", what, target, scope))
+        if isinstance(action, expr.Raise) and action.into is not None and action.into not in scope:
+            found.append(_unknown_name(span, "assigns", what, action.into, scope))
         if isinstance(action, expr.Block):
             continue  # its actions follow (`flat`); where it stands: `_misplaced_blocks`
         if isinstance(action, expr.Cancel | expr.If | expr.ForEach | expr.Log):

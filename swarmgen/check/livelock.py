@@ -35,7 +35,7 @@ from swarmgen.ir.nodes import (
     Vertex,
 )
 from swarmgen.ir.query import ModelIndex, Placed, initial_of, outgoing, walk
-from swarmgen.names import identifier
+from swarmgen.names import event_name
 
 MAX_QUEUE = 32  # internal events pending: past this the run is not followed further
 _TRANSIENT = {PseudoKind.CHOICE, PseudoKind.JUNCTION}
@@ -269,7 +269,7 @@ class _Run:
                 return True
             if trigger.kind in {TriggerKind.EVENT, TriggerKind.CALL}:
                 declared = self.index.events.get(trigger.event or "")
-                name = declared.ident if declared is not None else identifier(trigger.name)
+                name = declared.ident if declared is not None else event_name(trigger.name)
                 if name == event:
                     return True
         return False
@@ -289,7 +289,7 @@ class _Run:
             ):
                 event = self.index.events_by_name.get(action.event)
                 if event is None or not event.fields:
-                    found.append(event.ident if event is not None else identifier(action.event))
+                    found.append(event.ident if event is not None else event_name(action.event))
         return found
 
     # --- the report

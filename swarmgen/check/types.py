@@ -239,7 +239,7 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
     if isinstance(action, expr.Assign):
         target = typer.scope.names.get(action.target)
         value = typer.infer(action.value)
-        if not _compatible(target, value):
+        if action.target not in expr.SYSTEM_VARIABLES and not _compatible(target, value):
             typer.errors.append(
                 f"'{action.target}' is {_word(target or '')}, assigned {_word(value or '')}"
             )
@@ -265,10 +265,8 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
             for inner in branch.actions:
                 _action(index, typer, inner, datatypes)
         return
-    if isinstance(action, expr.Raise) and action.target is not None:
-        target = typer.infer(action.target)
-        if target is not None and target != "string":
-            typer.errors.append(f"the target of '{action.event}' is {_word(target)}, not a string")
+    if isinstance(action, expr.Raise):
+        _send_options(typer, action)
     if isinstance(action, expr.Raise) and action.delay is not None:
         amount = typer.infer(action.delay.amount)
         wanted = "string" if not action.delay.unit else "number"
@@ -285,6 +283,17 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
             typer.errors.append(
                 f"field '{arg.name}' of '{action.event}' is {_word(fields[arg.name] or '')}, given {_word(value or '')}"
             )
+
+
+def _send_options(typer: _Typer, action: expr.Raise) -> None:
+    """`to` and `via` take strings; `into` writes a string (the send id) to its datum."""
+    for word, value in (("target", action.target), ("I/O processor", action.via)):
+        found = typer.infer(value) if value is not None else None
+        if found is not None and found != "string":
+            typer.errors.append(f"the {word} of '{action.event}' is {_word(found)}, not a string")
+    if action.into is not None and not _compatible(typer.scope.names.get(action.into), "string"):
+        datum = typer.scope.names.get(action.into) or ""
+        typer.errors.append(f"'{action.into}' is {_word(datum)}, given a send id (a string)")
 
 
 def _loop(index: ModelIndex, typer: _Typer, action: expr.ForEach, datatypes: set[str]) -> None:

@@ -14,6 +14,8 @@ from swarmgen import console
 from swarmgen.commands.common import MODEL, PATH, guarded
 
 if TYPE_CHECKING:
+    import optuna
+
     from swarmgen.ir.nodes import Model
     from swarmgen.sim.optimize import Study
     from swarmgen.sim.scenario import Scenario
@@ -141,7 +143,7 @@ def _claim(output: Path) -> None:
         write_outputs({}, output, "", "optimize")
 
 
-def _write(study: object, spec: Study, model: Model, output: Path) -> None:
+def _write(study: optuna.Study, spec: Study, model: Model, output: Path) -> None:
     """best.json, trials.csv, the figures and the best variant, replaced atomically."""
     from swarmgen.sim import optimize_out as out
     from swarmgen.sim import params
@@ -149,10 +151,10 @@ def _write(study: object, spec: Study, model: Model, output: Path) -> None:
 
     texts = [o.text for o in spec.objectives]
     names = [d.name for d in spec.space]
-    files = {"trials.csv": out.trials_csv(study, names, texts).encode()}  # type: ignore[arg-type]
-    files.update(out.figures(study, texts))  # type: ignore[arg-type]
+    files = {"trials.csv": out.trials_csv(study, names, texts).encode()}
+    files.update(out.figures(study, texts))
     notes: list[str] = []
-    best = out.best_trials(study)  # type: ignore[arg-type]
+    best = out.best_trials(study)
     if best:
         point = tuple((n, best[0].params[n]) for n in names)
         variant = params.apply(spec.scenario, point, spec.names, "best")
@@ -160,15 +162,15 @@ def _write(study: object, spec: Study, model: Model, output: Path) -> None:
         files.update(variant_files)
     else:
         notes.append("no trial completed")
-    files["best.json"] = out.best_json(study, texts, notes)  # type: ignore[arg-type]
+    files["best.json"] = out.best_json(study, texts, notes)
     write_outputs(files, output, spec.model.name, "optimize")
 
 
-def _summary(study: object) -> str:
+def _summary(study: optuna.Study) -> str:
     """The best value(s) in one phrase."""
     from swarmgen.sim import optimize_out as out
 
-    best = out.best_trials(study)  # type: ignore[arg-type]
+    best = out.best_trials(study)
     if not best:
         return "no trial completed"
     if len(best) == 1:

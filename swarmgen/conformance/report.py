@@ -91,6 +91,7 @@ def markdown(content: Mapping[str, Any]) -> str:
         "",
         *_features(rows),
         "",
+        *_unexpressed(rows),
         *_semantics(rows),
         "## Results",
         "",
@@ -123,7 +124,10 @@ def _intro() -> list[str]:
         "- swarmgen: a test that compiles runs on `swarmgen.runtime.engine` with no external "
         f"input; timers fire by due time on a virtual clock (at most {MAX_EVENTS} events and "
         f"{MAX_VIRTUAL_MS // 1000} s of virtual time). A document the reader refuses is not "
-        "run: its diagnostics name the features it needs.",
+        "run: its diagnostics name the features it needs. swarmgen refuses an assignment to "
+        "an undeclared name when it compiles, so `confSwarmgen.xsl` writes the IRP's invalid "
+        "location of an `<assign>` as a read-only system variable (`_name`), the location its "
+        "datamodel cannot assign when it runs (W3C: error.execution for both).",
         "- Qt SCXML: all documents start at once in one process and run for at most "
         f"{WAIT_SECONDS:g} s of wall time. libxslt skips confEcma.xsl's XSLT 2.0 "
         "`analyze-string` (its conds would come out empty, i.e. true), so those attributes are "
@@ -165,6 +169,38 @@ def _features(rows: Mapping[str, Mapping[str, Any]]) -> list[str]:
     for name in order:
         lines.append(f"| {_cell(name)} | {first[name]} | {alone[name]} | {anywhere[name]} |")
     return lines
+
+
+# Tests that check ECMAScript's `undefined` (`typeof x === 'undefined'`): the decision, per test,
+# of what swarmgen's typed datamodel makes of them (docs/semantics.md, "The value rule")
+_UNDEFINED = (
+    "swarmgen's datamodel has no `undefined`: every datum and event field always holds a typed "
+    "value (the value rule)"
+)
+_NO_DATA = (
+    "an event without data has `_event.data` = `{}`, which no expression can test (data-type "
+    "values do not compare: SG208); what the test wants first, error.execution before the done "
+    'event, is swarmgen\'s too (docs/semantics.md, "Final states and done data")'
+)
+UNEXPRESSED = {
+    "277": f"{_UNDEFINED}, so a `<data>` whose expression fails holds its zero, not an unbound "
+    "value; meaningless for it",
+    "280": f'{_UNDEFINED}, and every datum exists from the start (`binding="late"` is SG060); '
+    "meaningless for it",
+    "528": f"{_UNDEFINED}; {_NO_DATA}",
+    "343": f"{_UNDEFINED}; {_NO_DATA}",
+    "488": f"{_UNDEFINED}; {_NO_DATA}",
+    "445": f"{_UNDEFINED}: a datum declared without a value holds 0; meaningless for it",
+}
+
+
+def _unexpressed(rows: Mapping[str, Mapping[str, Any]]) -> list[str]:
+    """The tests of ECMAScript's `undefined` that swarmgen does not run, and why (decided)."""
+    found = [t for t in UNEXPRESSED if rows.get(t, {}).get("swarmgen") == "not-run"]
+    if not found:
+        return []
+    lines = ["## Tests of `undefined` (typeof)", ""]
+    return [*lines, *(f"- {t}: {UNEXPRESSED[t]}." for t in found), ""]
 
 
 def _semantics(rows: Mapping[str, Mapping[str, Any]]) -> list[str]:

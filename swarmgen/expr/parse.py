@@ -374,6 +374,10 @@ class _Parser:
 
     def assignment(self, what: str) -> tuple[str, Expr]:
         start = self.peek()
+        if start.text in SYSTEM_VARIABLES and self.is_op("=", self.peek(1)):
+            self.advance()  # read-only (`_event` too): error.execution when it runs (W3C)
+            self.advance()
+            return start.text, self.expr(0)[0]
         lhs, _ = self.expr(0)
         tok = self.peek()
         if not self.is_op("=", tok):

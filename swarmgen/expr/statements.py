@@ -8,6 +8,7 @@ from swarmgen.expr.errors import error_at
 from swarmgen.expr.lex import Tok
 from swarmgen.expr.parse import _Parser, _show_tok
 from swarmgen.expr.tree import (
+    EVENT_NAME,
     RESERVED,
     Action,
     Arg,
@@ -25,6 +26,7 @@ from swarmgen.expr.tree import (
     If,
     Log,
     Name,
+    Operand,
     Raise,
     Send,
 )
@@ -209,37 +211,63 @@ class _StatementParser(_Parser):
 
     def event_action(self) -> Raise | Send:
         verb = self.advance()
-        name = self.peek()
-        if name.kind != "word":
-            self.fail(name, f"expected an event name after '{verb.text}'")
-        self.advance()
+        name = self.event_name(verb)
         args = self.arguments() if self.is_op("(", self.peek()) else ()
-        target = None
-        if self.is_word("to", self.peek()) and verb.text == "raise":
-            self.advance()
-            target, _ = self.expr(0)
-        after = self.peek()
-        if not self.is_word("after", after):
-            if verb.text == "raise":
-                return Raise(event=name.text, args=args, target=target)
-            return Send(event=name.text, args=args)
         if verb.text != "raise":
-            self.fail(
-                after,
-                "only `raise` can be delayed",
-                hint="delay a `raise` to this member, and `send` from the transition it takes",
-            )
+            after = self.peek()
+            if self.is_word("after", after):
+                self.fail(
+                    after,
+                    "only `raise` can be delayed",
+                    hint="delay a `raise` to this member, and `send` from the transition it takes",
+                )
+            return Send(event=name, args=args)
+        target = self.operand_after("to")
+        via = self.operand_after("via")
+        delay, sendid = None, None
+        if self.is_word("after", self.peek()):
+            self.advance()
+            delay = self.delay()
+            sendid = self.name_after("as", "a send id", "`raise e after 1 s as t`")
+        into = None
+        if sendid is None:  # W3C: `id` or `idlocation`, not both
+            into = self.name_after("into", "a member datum", "`raise e after 1 s into d`")
+        return Raise(
+            event=name, args=args, delay=delay, sendid=sendid, target=target, via=via, into=into
+        )
+
+    def operand_after(self, word: str) -> Operand | None:
+        """The expression after `word` (`to`, `via`), when `word` comes next."""
+        if not self.is_word(word, self.peek()):
+            return None
         self.advance()
-        delay = self.delay()
-        sendid = None
-        if self.is_word("as", self.peek()):
-            self.advance()
-            tok = self.peek()
-            if tok.kind != "word" or tok.text in RESERVED:
-                self.fail(tok, "expected a send id after 'as'", hint="`raise e after 1 s as t`")
-            self.advance()
-            sendid = tok.text
-        return Raise(event=name.text, args=args, delay=delay, sendid=sendid, target=target)
+        value, _ = self.expr(0)
+        return value
+
+    def name_after(self, word: str, what: str, hint: str) -> str | None:
+        """The name after `word` (`as`, `into`), when `word` comes next."""
+        if not self.is_word(word, self.peek()):
+            return None
+        self.advance()
+        tok = self.peek()
+        if tok.kind != "word" or tok.text in RESERVED:
+            self.fail(tok, f"expected {what} after '{word}'", hint=hint)
+        self.advance()
+        return tok.text
+
+    def event_name(self, verb: Tok) -> str:
+        """The event after `raise`/`send`: a name, or W3C's dotted tokens written without blanks
+        (`foo.bar`, `In-s11p112`), whatever tokens the lexer made of them."""
+        first = self.peek()
+        if first.kind != "word":
+            self.fail(first, f"expected an event name after '{verb.text}'")
+        found = EVENT_NAME.match(self.text, first.offset)
+        end = found.end() if found is not None else first.offset + len(first.text)
+        while self.peek().kind != "eof" and self.peek().offset < end:
+            tok = self.advance()
+            if tok.offset + len(tok.text) > end:  # `e-1e+5`: a number runs past the name
+                self.fail(tok, f"expected an event name after '{verb.text}'")
+        return self.text[first.offset : end]
 
     def delay(self) -> Delay:
         """`after <amount> ms|s`, or `after <amount>` with a duration string's value."""

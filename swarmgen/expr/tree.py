@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Callable, Collection, Iterable, Iterator
 from typing import Annotated, Any, Literal
 
@@ -60,6 +61,19 @@ def _data_name(value: str) -> str:
 
 
 Ident = Annotated[str, AfterValidator(_ident)]
+
+# An event's name in `raise`/`send`: a name, or W3C's dotted tokens (`foo.bar`, `In-s11p112`:
+# letters, digits, `_` and `-`), read as one by the statement parser (`statements`)
+EVENT_NAME = re.compile(r"(?!__)[^\W\d][\w-]*(?:\.[\w-]+)*")
+
+
+def _event_name(value: str) -> str:
+    if EVENT_NAME.fullmatch(value) is None:
+        raise ValueError(f"{value!r} is not an event name")
+    return value
+
+
+EventName = Annotated[str, AfterValidator(_event_name)]
 DataName = Annotated[str, AfterValidator(_data_name)]
 
 
@@ -204,11 +218,21 @@ def _unique_args(args: tuple[Arg, ...]) -> tuple[Arg, ...]:
     return args
 
 
+def _location(value: str) -> str:
+    return value if value in SYSTEM_VARIABLES else _data_name(value)
+
+
+# what an assignment may name: member data, or a system variable (read-only: W3C's
+# error.execution when the assignment runs, docs/semantics.md)
+Location = Annotated[str, AfterValidator(_location)]
+
+
 class Assign(_Model):
-    """``name = expr``: set a member data item."""
+    """``name = expr``: set a member data item. To a system variable (`_sessionid = e`) it
+    sets nothing and raises error.execution when it runs (W3C 5.10: they are read-only)."""
 
     kind: Literal["assign"] = "assign"
-    target: DataName
+    target: Location
     value: Operand
 
 
@@ -229,20 +253,24 @@ class Raise(_Model):
     `<send>` to the session's own external queue), cancellable by its send id."""
 
     kind: Literal["raise"] = "raise"
-    event: Ident
+    event: EventName
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
     delay: Delay | None = None
     sendid: Ident | None = None  # `as <name>`: what `cancel <name>` names
     # `to <expr>`: W3C's <send target>: this member's session (`"#_scxml_" + _sessionid`), or
     # `"#_internal"`; another session is error.communication, anything else error.execution
     target: Operand | None = None
+    # `via <expr>`: W3C's <send type|typeexpr>: the SCXML event processor (its URI or "scxml")
+    # is the only one; any other value is error.execution and nothing is sent
+    via: Operand | None = None
+    into: DataName | None = None  # `into <datum>`: W3C's idlocation, the generated send id
 
 
 class Send(_Model):
     """Send an event to the swarm."""
 
     kind: Literal["send"] = "send"
-    event: Ident
+    event: EventName
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
 
 
@@ -453,10 +481,13 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     amount = rewrite(delay.amount) if delay is not None else None
     given = action.target if isinstance(action, Raise) else None
     target = rewrite(given) if given is not None else None
+    given_via = action.via if isinstance(action, Raise) else None
+    via = rewrite(given_via) if given_via is not None else None
     if (
         all(v is a.value for v, a in zip(values, action.args, strict=True))
         and (delay is None or amount is delay.amount)
         and target is given
+        and via is given_via
     ):
         return action
     args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
@@ -464,7 +495,15 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
         return Send(event=action.event, args=args)
     if delay is not None and amount is not None:
         delay = Delay(amount=amount, unit=delay.unit)
-    return Raise(event=action.event, args=args, delay=delay, sendid=action.sendid, target=target)
+    return Raise(
+        event=action.event,
+        args=args,
+        delay=delay,
+        sendid=action.sendid,
+        target=target,
+        via=via,
+        into=action.into,
+    )
 
 
 def action_exprs(action: Action) -> tuple[Expr, ...]:
@@ -489,6 +528,8 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
         found = (action.delay.amount, *found)
     if isinstance(action, Raise) and action.target is not None:
         found = (action.target, *found)
+    if isinstance(action, Raise) and action.via is not None:
+        found = (action.via, *found)
     return found
 
 

@@ -203,11 +203,13 @@ class Actions:
             )
             if value is None and not len(node) and (node.text or "").strip():
                 value = (node.text or "").strip()  # inline content: an expression's text
-            if location in expr.SYSTEM_VARIABLES:
-                why = "system variables are read-only: swarmgen refuses the assignment when it compiles (W3C: error.execution when it runs)"
+            if location in expr.SYSTEM_VARIABLES and tag == "data":
+                why = "a system variable is no data id"
                 self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why=why)
                 return []
             text = self.text(str(value), node) if value is not None else None
+            if location in expr.SYSTEM_VARIABLES:  # read-only: error.execution when it runs
+                return [f"{location} = {text}"] if text is not None else []
             if value is None or not location.isidentifier():
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,
@@ -264,16 +266,32 @@ class Actions:
             if text is None:
                 return []
             to = f" to ({text})"  # W3C's <send target>: docs/semantics.md, "Targets"
+        via = self.via(node)
+        if via is None:
+            return []
+        to += via
+        into = f" into {self.name(node.get('idlocation', ''))}" if node.get("idlocation") else ""
         delayed = target is None or {"delay", "delayexpr"} & set(node.attrib)
-        if not lines or not (delayed or to):
+        if not lines or not (delayed or to or into):
             return lines
-        if to and not {"delay", "delayexpr"} & set(node.attrib):
-            return [f"{lines[0]}{to}"]
+        if not delayed:
+            return [f"{lines[0]}{to}{into}"]
         delay = self.delay(node)
         if delay is None:
             return []
         sendid = node.get("id")
-        return [f"{lines[0]}{to} after {delay}" + (f" as {sendid}" if sendid else "")]
+        return [f"{lines[0]}{to} after {delay}" + (f" as {sendid}" if sendid else into)]
+
+    def via(self, node: etree._Element) -> str | None:
+        """` via (p)` of `<send type|typeexpr>` ("" for the SCXML event processor, which is
+        the default; None when `typeexpr` is not read)."""
+        kind, computed = node.get("type"), node.get("typeexpr")
+        if computed is not None:
+            text = self.text(computed, node)
+            return f" via ({text})" if text is not None else None
+        if kind in (None, _PROCESSOR, "scxml"):
+            return ""
+        return f" via ({expr.to_text(expr.Const(value=str(kind)))})"  # error.execution
 
     def delay(self, node: etree._Element) -> str | None:
         """The `after` of a delayed send: `N ms`/`N s` from `delay`, an expression from
@@ -464,16 +482,22 @@ _LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
 # what swarmgen's emitter writes for a computed delay (docs/scxml.md)
 _OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
 _PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
-_UNREAD_SEND = ("typeexpr", "eventexpr", "idlocation")
+_UNREAD_SEND = ("eventexpr",)
+_HTTP = "http://www.w3.org/TR/scxml/#BasicHTTPEventProcessor"
 
 
 def _unread_send(node: etree._Element) -> str | None:
     """Why swarmgen does not read this `<send>`, or None."""
     sendid = node.get("id")
-    if node.get("type") not in (None, _PROCESSOR):
-        return "a send through another I/O processor is not in the IR"
+    if node.get("type") in (_HTTP, "basichttp"):
+        return "swarmgen has no Basic HTTP event I/O processor"
     if any(node.get(a) is not None for a in _UNREAD_SEND) or children(node, "content"):
-        return "typeexpr, eventexpr, idlocation and <content> are not in the IR yet"
+        return "eventexpr and <content> are not in the IR yet"
+    location = node.get("idlocation")
+    if location is not None and (not location.isidentifier() or location.startswith("_")):
+        return "an idlocation is a data id"
+    if sendid is not None and location is not None:
+        return "id and idlocation exclude each other"
     if not all(n.isidentifier() for n in str(node.get("namelist", "")).split()):
         return "a namelist names data ids"
     if sendid is not None and (not sendid.isidentifier() or sendid.startswith("__")):

@@ -69,11 +69,13 @@ def _delay_text(action: expr.Raise | expr.Send) -> str:
     if not isinstance(action, expr.Raise):
         return ""
     to = f" to {expr.to_text(action.target)}" if action.target is not None else ""
+    to += f" via {expr.to_text(action.via)}" if action.via is not None else ""
+    into = f" into {action.into}" if action.into is not None else ""
     if action.delay is None:
-        return to
+        return to + into
     unit = f" {action.delay.unit}" if action.delay.unit else ""
     named = f" as {action.sendid}" if action.sendid else ""
-    return f"{to} after {expr.to_text(action.delay.amount)}{unit}{named}"
+    return f"{to} after {expr.to_text(action.delay.amount)}{unit}{named}{into}"
 
 
 def actions_text(actions: Iterable[expr.Action], opaque: Iterable[ir.OpaqueCode]) -> str:

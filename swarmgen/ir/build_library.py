@@ -14,7 +14,7 @@ from swarmgen.ir.nodes import (
     Event,
     RosBinding,
 )
-from swarmgen.names import identifier
+from swarmgen.names import event_name, identifier
 
 
 def read_behaviour(b: Builder, element: RawElement) -> Behaviour | None:
@@ -99,7 +99,7 @@ def read_event(b: Builder, element: RawElement) -> Event:
     return Event(
         id=element.id or element.span.path,
         name=element.name,
-        ident=identifier(element.name),
+        ident=event_name(element.name),
         fields=tuple(b.prop(a) for a in element.kids("ownedAttribute")),
         sender=sender,
         scope=scope,

@@ -182,6 +182,8 @@ class Event(Node):
 
     id: str
     name: str
+    # its run-time name (`names.event_name`): a dotted W3C event name (`foo.bar`) as the model
+    # writes it, else the identifier; a string in every output, never a Python name
     ident: str
     fields: tuple[Property, ...]
     sender: Literal["station", "member"] | None = None

@@ -217,6 +217,11 @@ class Context:
         """A system variable (`_event`, `_sessionid`, `_name`, `_ioprocessors`; W3C 5.10)."""
         return self._engine.system_variable(name, self.event)
 
+    def assign_system(self, name: str) -> None:
+        """`_sessionid = e`: system variables are read-only (W3C 5.10), so the assignment
+        fails: the engine raises error.execution and the rest of the block is skipped."""
+        raise AttributeError(f"the system variable {name} is read-only")
+
     def is_active(self, node_id: str) -> bool:
         """`In(state)`: whether the state is active."""
         return bool(self._engine.is_active(node_id))
@@ -275,6 +280,17 @@ class Context:
     ) -> None:
         """`raise e to target [after ...]`: W3C's `<send target>` (Engine.raise_targeted)."""
         self._engine.raise_targeted(name, data, target, delay_ms, sendid)
+
+    def raise_via(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None,
+        options: tuple[Any, Any, str | None, Any],
+        into: str | None = None,
+    ) -> None:
+        """`raise e [to t] via p [after d] [into v]`, options (target, delay_ms, sendid, via):
+        W3C's `<send type|typeexpr idlocation>` (Engine.raise_through)."""
+        self._engine.raise_through(name, data, options, into)
 
     def cancel(self, sendid: Any) -> None:
         """`cancel id` / `cancel (expr)`: the pending delayed events raised as that send id

@@ -279,7 +279,10 @@ class _Writer:
             if isinstance(action, c.Assign):
                 _sub(parent, "assign", {"location": action.location, "expr": self.js(action.value)})
             elif isinstance(action, c.Raise) and (
-                action.delay is not None or action.target is not None
+                action.delay is not None
+                or action.target is not None
+                or action.via is not None
+                or action.into is not None
             ):
                 self.params(self.delayed(parent, action, action.delay), action.params, "param")
             elif isinstance(action, c.Raise) and not action.params:
@@ -337,6 +340,15 @@ class _Writer:
             attrs["target"] = target.value
         elif target is not None:
             attrs["targetexpr"] = self.js(target)
+        elif delay is None:  # `via`/`into` alone: as `raise e(...)` (docs/semantics.md)
+            attrs["target"] = "#_internal"
+        via = action.via
+        if isinstance(via, expr.Const) and isinstance(via.value, str):
+            attrs["type"] = via.value
+        elif via is not None:
+            attrs["typeexpr"] = self.js(via)
+        if action.into is not None:
+            attrs["idlocation"] = action.into
         if delay is None:
             return _sub(parent, "send", attrs)
         amount = delay.amount
@@ -450,8 +462,8 @@ def _expressions_of(node: c.Node) -> list[expr.Expr]:
             found.append(action.value)
         elif isinstance(action, c.Raise | c.Send):
             found += [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
-            if isinstance(action, c.Raise) and action.target is not None:
-                found.append(action.target)
+            if isinstance(action, c.Raise):
+                found += [e for e in (action.target, action.via) if e is not None]
     if node.call is not None:
         found += [a.value for a in node.call.args]
     return found

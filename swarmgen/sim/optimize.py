@@ -84,9 +84,9 @@ class Dimension:
     def suggest(self, trial: optuna.Trial) -> params.Value:
         """The trial's value of this dimension."""
         if self.kind == "int":
-            return trial.suggest_int(self.name, int(self.low), int(self.high))
+            return int(trial.suggest_int(self.name, int(self.low), int(self.high)))
         if self.kind == "float":
-            return trial.suggest_float(self.name, float(self.low), float(self.high))
+            return float(trial.suggest_float(self.name, float(self.low), float(self.high)))
         return cast(params.Value, trial.suggest_categorical(self.name, list(self.choices)))
 
 
@@ -276,7 +276,7 @@ def recover(study: optuna.Study, alone: bool = False) -> int:
     for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
         host, pid = trial.user_attrs.get(_HOST), trial.user_attrs.get(_PID)
         ours = host == socket.gethostname() and isinstance(pid, int)
-        if not alone and (not ours or _alive(pid)):  # type: ignore[arg-type]
+        if not alone and (not ours or (isinstance(pid, int) and _alive(pid))):
             continue
         storage.set_trial_user_attr(trial._trial_id, _INTERRUPTED, True)
         storage.set_trial_state_values(trial._trial_id, TrialState.FAIL)

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from swarmgen.verify.state import thaw
-from swarmgen.verify.system import Step, SwarmState, System, canonical
+from swarmgen.verify.system import Message, Step, SwarmState, System, canonical
 
 MAX_SHOWN = 200  # timeline lines printed (the scenarios hold every step)
 
@@ -55,6 +55,7 @@ def rerun(
         elif step.member >= 0 and symmetry:
             step = replace(step, member=canonical(system, state)[1][step.member])
         trace.events.extend((number, *sent) for sent in _sent(system, state, step))
+        taken = _head(system, state, step)
         state, effect = system.apply(state, step)
         if step.member >= 0:
             trace.states.append(
@@ -62,15 +63,45 @@ def rerun(
             )
         if effect.replay is not None:
             trace.scenarios[system.ids[effect.member]].append(dict(effect.replay))
-        trace.lines.append(f"{number:4d}  {_describe(system, step, state)}")
+        trace.lines.append(f"{number:4d}  {_describe(system, step, state, taken)}")
         for index, message in effect.dropped:  # ignored at once (`reduce`): replayed alike
-            replayed = {"event": message.name}
-            if message.data is not None:
-                replayed["data"] = thaw(message.data)
-            trace.scenarios[system.ids[index]].append(replayed)
-            trace.lines.append(f"        {system.ids[index]} ignores {message.name}")
+            trace.scenarios[system.ids[index]].append(_replayed(system, index, message))
+            trace.lines.append(
+                f"        {system.ids[index]} ignores {_name(system, index, message)}"
+            )
     trace.final = state
     return trace
+
+
+def _head(system: System, state: SwarmState, step: Step) -> str:
+    """What a delivery takes from the member's inbox, in words ("" for another step)."""
+    if step.kind != "deliver":
+        return ""
+    return _name(system, step.member, system.member(state, step.member).inbox[0])
+
+
+def _name(system: System, index: int, message: Message) -> str:
+    """A message in words: an event's name, or a behaviour's end."""
+    if message.kind != "outcome":
+        return message.name
+    chart = system.kinds[system.types[index]].chart
+    return f"the end of {chart.names.get(message.state, message.state)} ({message.name})"
+
+
+def _replayed(system: System, index: int, message: Message) -> dict[str, Any]:
+    """A message as the `swarmgen replay` step that gives it to the member."""
+    if message.kind == "outcome":
+        call = system.kinds[system.types[index]].chart.nodes[message.state].call
+        return {
+            "complete": call.behaviour if call is not None else message.state,
+            "outcome": message.name,
+            "outputs": thaw(message.data) or {},
+            "state": message.state,
+        }
+    replayed: dict[str, Any] = {"event": message.name}
+    if message.data is not None:
+        replayed["data"] = thaw(message.data)
+    return replayed
 
 
 def _sent(system: System, state: SwarmState, step: Step) -> list[tuple[str, Any, str]]:
@@ -107,7 +138,7 @@ def active_names(system: System, state: SwarmState, index: int) -> list[str]:
     return [chart.names.get(n.id, n.id) for n in nodes if n.is_atomic]
 
 
-def _describe(system: System, step: Step, after: SwarmState) -> str:
+def _describe(system: System, step: Step, after: SwarmState, taken: str) -> str:
     if step.kind == "station":
         return f"station sends {step.event}"
     who = system.ids[step.member]
@@ -115,14 +146,14 @@ def _describe(system: System, step: Step, after: SwarmState) -> str:
     chart = system.kinds[system.types[step.member]].chart
     state = chart.names.get(step.state, step.state)
     if step.kind == "deliver":
-        return f"{who} takes the next event of its inbox  -> {who}: {where}"
+        return f"{who} takes {taken} from its inbox  -> {who}: {where}"
     if step.kind == "outcome":
-        return f"{who}: the behaviour of {state} ends with '{step.event}'  -> {who}: {where}"
+        return f"{who}: the behaviour of {state} ends with '{step.event}' (queued)"
     if step.kind == "emit":
         return f"{who}: the behaviour of {state} sends {step.event}"
     if step.kind == "delayed":
-        return f"{who}: the delayed {step.event} ({step.state}) arrives  -> {who}: {where}"
-    return f"{who}: the timer {step.event} of {state} fires  -> {who}: {where}"
+        return f"{who}: the delayed {step.event} ({step.state}) arrives (queued)"
+    return f"{who}: the timer {step.event} of {state} fires (queued)"
 
 
 def timeline(system: System, trace: Trace) -> list[str]:

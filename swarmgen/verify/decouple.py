@@ -6,9 +6,10 @@ The station is silent after the abort, and every running member has the abort in
 (or ignored it). An event a member sends goes to the end of the others' inboxes: behind
 everything queued there, the abort among it. A member is **sealed** when, along its own steps
 (deliveries of what is already in its inbox, behaviour ends, emissions, timers), every value
-it reaches with an empty inbox either finished or can take none of the events members send
-(no state it can still reach has a transition on one: `Reducer.live`): whatever arrives later
-is dropped without touching its engine. When every member is sealed, the reachable swarm
+it reaches without the abort still queued either finished or can take none of the events
+members send (no state it can still reach has a transition on one: `Reducer.live`): whatever
+arrives later is taken after the abort, by such a value or one it leads to, and dropped
+without touching its engine. When every member is sealed, the reachable swarm
 states are, up to those dropped events, the product of the members' reachable values, so:
 
 - a swarm state with every member final stays reachable from every reachable state (abort
@@ -84,7 +85,9 @@ def _local(system: System, start: int) -> Local:
         member = system.values[value]
         if member.engine.finished:
             found.finished.add(value)
-        elif not member.inbox and system.hears(value):
+        elif not any(m.name in system.abort and m.source == "station" for m in member.inbox) and (
+            system.hears(value)
+        ):
             found.open = True
             return found
         steps = system.local_steps(value)

@@ -3,8 +3,10 @@ the member value at hand, given one input, captured again (`MemberKind.run`).
 
 Each member type runs the module the asyncio backend generates for it (its chart over
 `swarmgen.runtime`), so a verifier step is a macrostep of the very engine `replay` and the
-generated packages run. After its input a member also processes the events it queued to itself
-(`raise e(f = ...)`), as the asyncio member and `swarmgen replay` do before their next input.
+generated packages run. An input is an event from the member's queue: a station or swarm event,
+a fired timer or delayed raise, or a behaviour's end (`outcome`, its `done.invoke` event). After
+its input a member also processes the events it queued to itself (`raise e(f = ...)`), as
+`swarmgen replay` does before its next input (docs/verify.md, "The transition system").
 """
 
 from __future__ import annotations
@@ -42,12 +44,16 @@ class Outcome:
 @dataclass(frozen=True, slots=True)
 class Ran:
     """What one input did to a member's engine: the engine after, the events it sent (name,
-    data, scope), the input as a `swarmgen replay` step and the states it entered."""
+    data, scope), the input as a `swarmgen replay` step, the states it entered, the states
+    whose behaviour it cancelled (their queued outcomes are stale) and the timers it
+    cancelled."""
 
     after: EngineState
     sent: tuple[tuple[str, Frozen, str], ...]
     replay: Mapping[str, Any]
     entered: frozenset[str]
+    left: frozenset[str] = frozenset()
+    stopped: frozenset[tuple[str, str]] = frozenset()
 
 
 @dataclass
@@ -68,8 +74,8 @@ class MemberKind:
     endings: dict[str, tuple[Outcome, ...]] = field(default_factory=dict)  # state id -> ends
 
     def run(self, before: EngineState, kind: str, name: str, data: Frozen, state_id: str) -> Ran:
-        """One input (`deliver`/`timer` an event, `outcome` a behaviour end with outputs
-        `data`) to a member in `before`."""
+        """One input to a member in `before`: `deliver` an event (with `data`), `outcome` the
+        end of the behaviour of `state_id` with the outcome `name` and outputs `data`."""
         engine, host = self.engine, self.host
         restore(engine, host, before)
         replayed: dict[str, Any]
@@ -85,10 +91,6 @@ class MemberKind:
             replayed = {"complete": behaviour, "outcome": name, "outputs": outputs}
             replayed["state"] = state_id
         else:
-            if kind == "timer":
-                host.cancel_timer(self.chart.nodes[state_id], name)  # it fired
-            if kind == "delayed":
-                data = host.arrived(state_id, name)
             value = thaw(data)
             event = Event(name, value, 0, 0.0, "verify")
             replayed = {"event": name} if value is None else {"event": name, "data": value}
@@ -103,7 +105,9 @@ class MemberKind:
             )
             for e in host.sent
         )
-        return Ran(capture(engine, host), sent, replayed, frozenset(self.entered))
+        after = capture(engine, host)
+        left, stopped = frozenset(host.left), frozenset(host.stopped)
+        return Ran(after, sent, replayed, frozenset(self.entered), left, stopped)
 
 
 def make_kind(

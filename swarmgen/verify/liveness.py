@@ -26,6 +26,7 @@ from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+from swarmgen.graphs import strongly_connected
 from swarmgen.props.tree import Property
 from swarmgen.verify.observe import Graph, Observer
 from swarmgen.verify.system import Step
@@ -172,49 +173,10 @@ def _fair_cycle(product: _Product) -> tuple[int, list[Step]] | None:
 
 
 def _components(product: _Product, nodes: set[int]) -> list[set[int]]:
-    """The strongly connected components of the subgraph on `nodes` (iterative Tarjan)."""
-    index: dict[int, int] = {}
-    low: dict[int, int] = {}
-    stack: list[int] = []
-    on_stack: set[int] = set()
-    found: list[set[int]] = []
-    for root in sorted(nodes):
-        if root in index:
-            continue
-        work: list[tuple[int, Iterator[tuple[int, int]]]] = [(root, product.successors(root))]
-        index[root] = low[root] = len(index)
-        stack.append(root)
-        on_stack.add(root)
-        while work:
-            node, successors = work[-1]
-            advanced = False
-            for successor, _ in successors:
-                if successor not in nodes:
-                    continue
-                if successor not in index:
-                    index[successor] = low[successor] = len(index)
-                    stack.append(successor)
-                    on_stack.add(successor)
-                    work.append((successor, product.successors(successor)))
-                    advanced = True
-                    break
-                if successor in on_stack:
-                    low[node] = min(low[node], index[successor])
-            if advanced:
-                continue
-            work.pop()
-            if work:
-                low[work[-1][0]] = min(low[work[-1][0]], low[node])
-            if low[node] == index[node]:
-                component = set()
-                while True:
-                    member = stack.pop()
-                    on_stack.discard(member)
-                    component.add(member)
-                    if member == node:
-                        break
-                found.append(component)
-    return found
+    """The strongly connected components of the subgraph on `nodes`."""
+    return strongly_connected(
+        sorted(nodes), lambda node: (s for s, _ in product.successors(node) if s in nodes)
+    )
 
 
 def _cycle(
@@ -227,7 +189,10 @@ def _cycle(
         wanted.setdefault(product.observer.label(graph.steps[graph.step[found[2]]]), found)
     steps: list[Step] = []
     here = entry
-    for source, target, index in wanted.values():
+    label = product.observer.label
+    for taken, (source, target, index) in wanted.items():
+        if any(label(step) == taken for step in steps):
+            continue  # the way to an earlier label's edge took one of this label already
         steps += _inside(product, component, here, source)
         steps.append(graph.steps[graph.step[index]])
         here = target

@@ -9,12 +9,18 @@ stutter-bisimilar for every property `verify` checks:
 
 - **an ignored delivery**: the event at the head of a member's inbox makes its engine take no
   transition and send nothing (the member is in a state that does not handle it): the event is
-  dropped from the inbox. Whether it was *lost* (no member at all took it) is what SG406
-  tracks, on the dropped messages this module reports;
-- **an inert behaviour end**: a running behaviour that can send no more events (no `emits`, or
-  its `--emits` bound reached) and whose every outcome leaves the member as it is apart from the
-  behaviour's end (no transition on it, outputs already equal to the data they write): it is
-  taken as ended at once.
+  dropped from the inbox. The inbox is the member's one FIFO queue (its behaviours' ends,
+  timers and delayed raises go to its end too), so nothing the member does can come before
+  the head: the member's next input is that event, in the state it is in now, whatever else
+  happens first (docs/verify.md, "Why an ignored head may be dropped"). Whether it was *lost*
+  (no member at all took it) is what SG406 tracks, on the dropped messages this module
+  reports;
+- **an inert behaviour end**, when the inbox is empty: a running behaviour that can send no
+  more events (no `emits`, or its `--emits` bound reached) and whose every outcome leaves the
+  member as it is apart from the behaviour's end (no transition on it, outputs already equal
+  to the data they write): it is taken as ended at once. Its end would be the head of the
+  inbox, taken next and ignored; with events queued before it, the engine may have changed by
+  the time it is taken, so it waits for the inbox to empty.
 
 A third reduction drops **dead messages**: an event that no transition of any state the member
 can still reach (from its active states, along any transition, whatever its event or guard: an
@@ -74,13 +80,15 @@ class Reducer:
 
         engine, inbox = member.engine, member.inbox
         dropped: list[Message] = []
-        if inbox and engine.running:
-            live = tuple(m for m in inbox if self.live(kind, engine.config, m.name))
+        if inbox and engine.running:  # an outcome queued for an active state is always live
+            live = tuple(
+                m for m in inbox if m.kind == "outcome" or self.live(kind, engine.config, m.name)
+            )
             if len(live) < len(inbox):
                 dropped.extend(m for m in inbox if m not in live)
                 inbox = live
         while engine.running:
-            ended = self._inert_ended(kind, engine)
+            ended = None if inbox else self._inert_ended(kind, engine)
             if ended is not None:
                 engine = ended
                 continue
@@ -109,7 +117,7 @@ class Reducer:
         return known
 
     def _ignores(self, kind: int, engine: EngineState, message: Message) -> bool:
-        ran = self.system.run_input(kind, engine, "deliver", message.name, message.data, "")
+        ran = self.system.take(kind, engine, message)
         return not ran.sent and ran.after == engine
 
     def _inert_ended(self, kind: int, engine: EngineState) -> EngineState | None:

@@ -72,14 +72,17 @@ class VerifyHost:
         self.sent: list[Event] = []
         self.own: list[Event] = []  # `raise e(f = ...)`: to this member's own queue
         self.delayed: list[tuple[str, str, Frozen]] = []  # pending delayed raises
+        self.left: set[str] = set()  # states whose behaviour this step cancelled
+        self.stopped: set[tuple[str, str]] = set()  # timers this step cancelled
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
         """A behaviour starts: it runs until the verifier ends it."""
         self.calls[node.id] = 0
 
     def cancel_call(self, node: Node, activation: int) -> None:
-        """Its state was left: the behaviour stops."""
+        """Its state was left: the behaviour stops (an outcome of it still queued is stale)."""
         self.calls.pop(node.id, None)
+        self.left.add(node.id)
 
     def start_timer(self, node: Node, event: str, delay_ms: int) -> None:
         """A pending timer: it may fire at any later step (delays are not modelled)."""
@@ -87,6 +90,7 @@ class VerifyHost:
 
     def cancel_timer(self, node: Node, event: str) -> None:
         """The timer's state was left."""
+        self.stopped.add((node.id, event))
         pending = self.timers.get(node.id)
         if pending is not None:
             pending.discard(event)
@@ -100,14 +104,6 @@ class VerifyHost:
     def cancel_delayed(self, key: str) -> None:
         """`cancel key`: its pending delayed raises never arrive."""
         self.delayed = [pending for pending in self.delayed if pending[0] != key]
-
-    def arrived(self, key: str, name: str) -> Frozen:
-        """The first pending delayed raise of `key` and `name` arrives: its data."""
-        for number, (k, n, data) in enumerate(self.delayed):
-            if (k, n) == (key, name):
-                del self.delayed[number]
-                return data
-        return None
 
     def send_swarm(self, event: Event) -> None:
         """An event to the swarm: the system puts it in the receivers' inboxes."""
@@ -173,3 +169,5 @@ def restore(engine: Engine, host: VerifyHost, state: EngineState) -> None:
     host.delayed = list(state.delayed)
     host.sent = []
     host.own = []
+    host.left = set()
+    host.stopped = set()

@@ -11,15 +11,20 @@ nondeterministic choice:
   `station_bound` times, never after the abort, so the space stays finite);
 - `deliver`: a member takes the first event of its inbox (one macrostep of its engine);
 - `outcome`: a running behaviour ends with one of its declared outcomes and outputs from the
-  finite domains `domains` computes;
+  finite domains `domains` computes: its `done.invoke` event goes to the end of the member's
+  inbox (the asyncio member's queue: docs/verify.md, "The transition system");
 - `emit`: a running behaviour sends one of the events its `emits` tag names (at most
   `emit_bound` times per activation);
-- `timer`: a pending timer fires;
-- `delayed`: a pending `raise e after ...` arrives (any time before it is cancelled).
+- `timer`: a pending timer fires: its event goes to the end of the member's inbox;
+- `delayed`: a pending `raise e after ...` arrives (any time before it is cancelled): to the
+  end of the member's inbox.
 
-The swarm events a member sent go to the end of the inbox of every running member (the
-sender's too), `local` ones to the sender only. Every member value is kept in its normal form
-(`reduce`): ignored deliveries and inert behaviour ends are taken at once.
+A member's inbox is its one FIFO queue: what the station and members send it and what its own
+behaviours, timers and delayed raises put there, in the order it happened. The swarm events a
+member sent go to the end of the inbox of every running member (the sender's too), `local`
+ones to the sender only. An outcome still queued when its state is left is stale: it is
+dropped (the engine discards it by its activation number). Every member value is kept in its
+normal form (`reduce`): ignored deliveries and inert behaviour ends are taken at once.
 """
 
 from __future__ import annotations
@@ -36,11 +41,15 @@ from swarmgen.verify.state import EngineState, Frozen
 
 @dataclass(frozen=True, slots=True)
 class Message:
-    """An event in flight to one member: its name, data and who sent it."""
+    """An event in a member's inbox: its name, data and who sent it; for an input the member
+    queued itself, what it is (`outcome`: a behaviour's end, `name` the outcome, `data` the
+    outputs; `timer`; `delayed`) and its state (the send id's key for a delayed raise)."""
 
     name: str
     data: Frozen
-    source: str  # "station", or the sending member's type
+    source: str  # "station", the sending member's type, or "" (the member's own input)
+    kind: str = ""  # "" (an event sent to it), "outcome", "timer" or "delayed"
+    state: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -367,6 +376,8 @@ class System:
 
     def _move(self, value: int, step: Step) -> Move:
         member, kind = self.values[value], self.value_type[value]
+        if step.kind != "deliver" and step.kind != "emit":
+            return self._queue_own(value, step)
         inbox = member.inbox
         if step.kind == "emit":
             calls = tuple((s, n + 1 if s == step.state else n) for s, n in member.engine.calls)
@@ -375,15 +386,14 @@ class System:
             sent: tuple[tuple[str, Frozen, str], ...] = ((step.event, None, scope),)
             effect = Effect(sent=(step.event,))
         else:
-            name, data, source = step.event, step.data, ""
-            if step.kind == "deliver":
-                head, inbox = inbox[0], inbox[1:]
-                name, data, source = head.name, head.data, head.source
-            ran = self.run_input(kind, member.engine, step.kind, name, data, step.state)
+            head, inbox = inbox[0], inbox[1:]
+            ran = self.take(kind, member.engine, head)
             after, sent = ran.after, ran.sent
+            if ran.left:  # outcomes of the behaviours it cancelled are stale
+                inbox = tuple(m for m in inbox if not (m.kind == "outcome" and m.state in ran.left))
             changed = ran.after != member.engine or bool(ran.sent)
             names = tuple(n for n, _, _ in sent)
-            effect = Effect(-1, ran.replay, name, source, changed, names, ran.entered)
+            effect = Effect(-1, ran.replay, head.name, head.source, changed, names, ran.entered)
         source_type = self.kinds[kind].name
         messages = [Message(n, d, source_type) for n, d, _ in sent]
         own = tuple(messages) if after.running else ()
@@ -394,6 +404,38 @@ class System:
         left = self.values[after_id].inbox
         kept = frozenset(m for m in own if m in left[len(left) - len(own) :])
         return Move(after_id, posts, effect, dropped, kept)
+
+    def _queue_own(self, value: int, step: Step) -> Move:
+        """A behaviour's end, a timer or a delayed raise: the member's own input goes to the
+        end of its inbox (the behaviour has ended, the timer or delayed raise is no longer
+        pending); the engine takes it when it reaches the head."""
+        member, kind = self.values[value], self.value_type[value]
+        engine = member.engine
+        data: Frozen = step.data
+        if step.kind == "outcome":
+            engine = replace(engine, calls=tuple(c for c in engine.calls if c[0] != step.state))
+        elif step.kind == "timer":
+            fired = (step.state, step.event)
+            engine = replace(engine, timers=tuple(t for t in engine.timers if t != fired))
+        else:  # delayed: the first pending one of its key and name arrives
+            pending = list(engine.delayed)
+            at = next(
+                i for i, (k, n, _) in enumerate(pending) if (k, n) == (step.state, step.event)
+            )
+            data = pending.pop(at)[2]
+            engine = replace(engine, delayed=tuple(pending))
+        message = Message(step.event, data, "", step.kind, step.state)
+        after_id, dropped = self._normal_id(kind, MemberState(engine, (*member.inbox, message)))
+        return Move(after_id, (), Effect(event=step.event), dropped)
+
+    def take(self, kind: int, engine: EngineState, message: Message) -> Any:
+        """What taking `message` from the head of its inbox does to a member's engine
+        (`MemberKind.run`'s `Ran`, computed once)."""
+        if message.kind == "outcome":
+            return self.run_input(
+                kind, engine, "outcome", message.name, message.data, message.state
+            )
+        return self.run_input(kind, engine, "deliver", message.name, message.data, "")
 
 
 def canonical_state(system: System, state: SwarmState) -> SwarmState:

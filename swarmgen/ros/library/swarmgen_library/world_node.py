@@ -157,7 +157,7 @@ class WorldNode:
         return all(p.get_subscription_count() > 0 for *_, pubs in self.outputs for p in pubs[1:])
 
     def _status_readers_matched(self) -> bool:
-        return self.status_pub.get_subscription_count() >= self.config.status_readers
+        return bool(self.status_pub.get_subscription_count() >= self.config.status_readers)
 
     def status_unmatched(self) -> int:
         """How many of the world file's status readers the final status would miss, after
@@ -166,13 +166,13 @@ class WorldNode:
         deadline = time.monotonic() + (FINAL_ACK_S if self.signalled is None else 0.0)
         while not self._status_readers_matched() and time.monotonic() < deadline:
             time.sleep(POLL_S)
-        return max(0, self.config.status_readers - self.status_pub.get_subscription_count())
+        return max(0, self.config.status_readers - int(self.status_pub.get_subscription_count()))
 
     def _served(self, robot: str) -> bool:
-        return self.node.count_publishers(self.cmd_topics[robot]) > 0
+        return bool(self.node.count_publishers(self.cmd_topics[robot]) > 0)
 
     def _live_reporters(self) -> int:
-        return self.node.count_publishers("/world/settle")
+        return int(self.node.count_publishers("/world/settle"))
 
     def run_loop(self) -> str:
         """Step until the stop condition; its reason."""

@@ -236,6 +236,35 @@ class Engine:
         else:
             raise ValueError(f"{target!r} is not a target this member can send to")
 
+    def raise_through(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None,
+        options: tuple[Any, Any, str | None, Any],
+        into: str | None,
+    ) -> None:
+        """`raise e [to t] via p [after d] [into v]`, options (target, delay_ms, sendid, via):
+        W3C's `<send type|typeexpr>` (only the SCXML event processor, by its URI or
+        `"scxml"`: any other value is error.execution, nothing sent) and `idlocation` (a send
+        id made here, unique in the session, written to the datum `into` first). The error
+        event of a send that fails carries its send id (W3C 5.10.1)."""
+        target, delay_ms, sendid, via = options
+        if into is not None:
+            self._sends += 1
+            sendid = self.data[into] = f"send.{self._sends}"
+        try:
+            if via is not None and via not in (PROCESSOR, "scxml"):
+                raise ValueError(f"{via!r} is not an event I/O processor this member has")
+            if target is not None:
+                self.raise_targeted(name, data, target, delay_ms or 0, sendid)
+            elif delay_ms is not None:
+                self.raise_delayed(name, data, delay_ms, sendid)
+            else:  # `<send target="#_internal">`: the back of the external queue, as with data
+                self.raise_internal(name, data if data is not None else {})
+        except (ValueError, CommunicationError) as err:
+            err.sendid = sendid or ""  # type: ignore[union-attr]  # read by `_error`
+            raise
+
     def cancel_delayed(self, sendid: str) -> None:
         """`cancel id`: the host drops the pending delayed events raised as `id`."""
         self.host.cancel_delayed(sendid)
@@ -481,6 +510,8 @@ class Engine:
         self.error_count += 1  # error events raised: execution and communication (as Qt)
         # no data, as in Qt SCXML: `where` and the error go to the host (`on_error`)
         name = "error.communication" if isinstance(err, CommunicationError) else "error.execution"
-        self.internal.append(self.make_event(name, None, kind="platform"))
+        error = self.make_event(name, None, kind="platform")
+        error.sendid = getattr(err, "sendid", None)  # a failed send's (raise_through)
+        self.internal.append(error)
         if self.on_error is not None:
             self.on_error(where, err)
