@@ -25,13 +25,12 @@ from swarmgen.runtime.chart import (
     CommunicationError,
     Context,
     Node,
-    Record,
     StepBoundExceeded,
     Transition,
     record,
 )
 from swarmgen.runtime.configuration import Chain, Configuration, Plan, Selection, Tables
-from swarmgen.runtime.host import PROCESSOR, Event, Host, NullHost, event_fields
+from swarmgen.runtime.host import PROCESSOR, Event, Host, NullHost, system_variable
 from swarmgen.runtime.microstep import document_order, in_final
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
@@ -123,14 +122,8 @@ class Engine:
         self, name: str, data: Mapping[str, Any] | None = None, sender: str = "", **extra: Any
     ) -> Event:
         """A new event from this engine: the next id, the clock's time."""
-        return Event(
-            name,
-            record(data) if data is not None else None,
-            next(self._ids),
-            self.clock(),
-            sender,
-            **extra,
-        )
+        made = record(data) if data is not None else None
+        return Event(name, made, next(self._ids), self.clock(), sender, **extra)
 
     def active(self) -> list[str]:
         """Ids of all active states (atomic and compound), sorted."""
@@ -158,10 +151,9 @@ class Engine:
         do with `<send target="#_internal">`, and Qt SCXML queues that after the external events
         already waiting: so does swarmgen (docs/semantics.md), through the host's own queue."""
         if data is None:  # `make_event`'s, inlined: an outcome raises one per behaviour's end
-            event = Event(
-                name, None, next(self._ids), self.clock(), self.member_id, None, "internal"
+            self.internal.append(
+                Event(name, None, next(self._ids), self.clock(), self.member_id, None, "internal")
             )
-            self.internal.append(event)
         else:
             self.host.deliver(self.make_event(name, data, self.member_id, kind="raised"))
 
@@ -189,16 +181,7 @@ class Engine:
 
     def system_variable(self, name: str, event: Event | None) -> Any:
         """`_event` (its W3C fields, docs/semantics.md), `_sessionid`, `_name`, `_ioprocessors`."""
-        if name == "_sessionid":
-            return self.session_id
-        if name == "_name":
-            return self.chart.name
-        if name == "_ioprocessors":
-            where = Record(location=f"#_scxml_{self.session_id}")
-            return Record({PROCESSOR: where, "scxml": where})
-        if event is None:
-            raise NameError("_event is not bound before the first event")
-        return event_fields(event)
+        return system_variable(name, event, self.session_id, self.chart.name)
 
     def log(self, label: str, value: Any) -> None:
         """`log`: to `on_log` when the host set one, else to Python's `logging` (INFO, logger

@@ -9,7 +9,7 @@ from typing import Any, Protocol
 from .chart import Call, Node
 from .values import Record
 
-__all__ = ["PROCESSOR", "Event", "Host", "NullHost", "event_fields"]
+__all__ = ["PROCESSOR", "Event", "Host", "NullHost", "event_fields", "system_variable"]
 
 
 @dataclass(slots=True)
@@ -123,3 +123,18 @@ def event_fields(event: Event) -> Record:
         invokeid="",
         data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
     )
+
+
+def system_variable(name: str, event: Event | None, session_id: str, chart_name: str) -> Any:
+    """A system variable of the session `session_id` of the chart `chart_name` (W3C 5.10):
+    `_sessionid`, `_name`, `_ioprocessors`, or `_event`'s fields (`event_fields`)."""
+    if name == "_sessionid":
+        return session_id
+    if name == "_name":
+        return chart_name
+    if name == "_ioprocessors":
+        where = Record(location=f"#_scxml_{session_id}")
+        return Record({PROCESSOR: where, "scxml": where})
+    if event is None:
+        raise NameError("_event is not bound before the first event")
+    return event_fields(event)
