@@ -226,3 +226,30 @@ def test_simulate_delivers_delayed_raises_in_ticks(tmp_path: Path) -> None:
     )
     (run,) = simulate(compile_machines(model), chosen).runs
     assert run.reason == "coverage" and run.coverage_final == 1.0
+
+
+def test_a_zero_delay_keeps_document_order(tmp_path: Path, qt_available: None) -> None:
+    """`raise a after 0 ms` then `raise b(n = 1)`: both go to the back of the external queue
+    when the action runs (W3C dispatches an undelayed `<send>` at once), `a` first; before, `a`
+    went through a timer and came after `b` in every Python backend but not in Qt SCXML."""
+    kit = ModelKit("Order")
+    kit.event("go", sender="station")
+    kit.event("a", scope="local")
+    kit.event("b", {"n": "Integer"}, scope="local")
+    machine = kit.machine("BotMachine")
+    machine.initial("Idle")
+    machine.state("Idle")
+    machine.state("A", entry="raise a after 0 ms\nraise b(n = 1)")
+    for state in ("AfterA", "AfterB", "AB", "BA"):
+        machine.state(state)
+    machine.transition("Idle", "A", "go")
+    machine.transition("A", "AfterA", "a")
+    machine.transition("A", "AfterB", "b")
+    machine.transition("AfterA", "AB", "b")
+    machine.transition("AfterB", "BA", "a")
+    kit.member("Bot", machine, data={})
+    kit.swarm("Swarm", {"Bot": 1})
+    model = tmp_path / "order.xmi"
+    model.write_text(kit.xmi(), encoding="utf-8")
+    trace = _traces(model, [{"event": "go"}, {"wait": 50}])
+    assert [r["active"] for r in trace] == [["Idle"], ["AB"], ["AB"]]

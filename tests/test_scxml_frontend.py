@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from swarmgen.conformance import irp
 from tests.conftest import XMI_SAMPLES, reference_absent, run_cli
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -213,3 +214,28 @@ def test_an_eventless_transition_of_a_parallel_state_is_not_its_completion(tmp_p
     again = _compile(tmp_path / "out" / "scxml" / "M.scxml", tmp_path / "again")
     assert again.returncode == 0, again.stdout + again.stderr
     assert _body((tmp_path / "again" / "scxml" / "M.scxml").read_text()) == _body(text)
+
+
+def test_an_untyped_list_datum_survives_the_round_trip(tmp_path: Path) -> None:
+    """`<data expr="[0, 2]">` is an untyped datum assigned when the machine starts; swarmgen
+    writes it as `<data expr="0">` without `sg:type`, which its reader took back as an Integer
+    (so the start's assignment of a list was SG208). A swarmgen document's `<data>` without
+    `sg:type` is untyped: the emitted document reads back to itself and still runs."""
+    source = tmp_path / "items.scxml"
+    source.write_text(
+        _doc(
+            '<datamodel><data id="xs" expr="[0, 2]"/><data id="n" expr="0"/></datamodel>\n'
+            '<state id="A"><onentry><foreach array="xs" item="n"/></onentry>\n'
+            '<transition cond="n == 2" target="pass"/><transition target="fail"/></state>\n'
+            '<final id="pass"/><final id="fail"/>'
+        )
+    )
+    first = _compile(source, tmp_path / "a")
+    assert first.returncode == 0, first.stdout + first.stderr
+    text = (tmp_path / "a" / "scxml" / "M.scxml").read_text()
+    assert '<data id="xs" expr="0"/>' in text  # untyped: no sg:type
+    again = _compile(tmp_path / "a" / "scxml" / "M.scxml", tmp_path / "b")
+    assert again.returncode == 0, again.stdout + again.stderr
+    assert _body((tmp_path / "b" / "scxml" / "M.scxml").read_text()) == _body(text)
+    for document in (source, tmp_path / "b" / "scxml" / "M.scxml"):
+        assert irp.run_document(document.read_bytes(), document) == irp.Outcome("pass")

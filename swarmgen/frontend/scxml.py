@@ -258,8 +258,12 @@ class _Document:
                 self.setup.append(data)
                 self.b.make("defaultValue", "LiteralNull", prop, data)
                 continue
-            type_name = sg(data, "type") or self.value_type(name, "", value, data)
-            self.b.typed(prop, type_name, self.types)
+            type_name = sg(data, "type")
+            if type_name is None and sg(self.root, "machine") is None:
+                type_name = self.value_type(name, "", value, data)
+            # (swarmgen wrote it: a datum without `sg:type` is untyped, whatever its value)
+            if type_name is not None:
+                self.b.typed(prop, type_name, self.types)
             if isinstance(value, dict) or value is None:
                 self.b.make("defaultValue", "LiteralNull", prop, data)
             else:

@@ -166,9 +166,9 @@ class Engine:
         self, name: str, data: Mapping[str, Any] | None, delay_ms: Any, sendid: str | None
     ) -> None:
         """`raise e after N ms [as id]`: the host delivers it to this member's external queue
-        after the delay (W3C: a delayed `<send>` to the session itself). It arrives as an input
-        from outside (the step bound restarts with it). A delay that is no number, or is
-        negative, is an error (error.execution): the event is not raised."""
+        after the delay (W3C: a delayed `<send>` to the session itself), as an input from
+        outside (the step bound restarts); after 0 ms at once, as `raise e(f = ...)`. A delay
+        that is no number, or is negative, is error.execution: the event is not raised."""
         if isinstance(delay_ms, bool) or not isinstance(delay_ms, int | float) or delay_ms < 0:
             raise ValueError(f"the delay of {name!r} is {delay_ms!r}, not a duration")
         if sendid is None:  # a key no `as <name>` can give (a name has no dot)
@@ -178,7 +178,11 @@ class Engine:
             key = sendid
         event = self.make_event(name, data, self.member_id)
         event.sendid = sendid or ""
-        self.host.start_delayed(key, event, delay_ms)
+        if delay_ms == 0:  # W3C 6.2.4: dispatched at once, in document order (as Qt SCXML)
+            event.kind = "raised"
+            self.host.deliver(event)
+        else:
+            self.host.start_delayed(key, event, delay_ms)
 
     def system_variable(self, name: str, event: Event | None) -> Any:
         """`_event` (its W3C fields, docs/semantics.md), `_sessionid`, `_name`, `_ioprocessors`."""
