@@ -31,6 +31,8 @@ _CLASSES = {
 _ARITHMETIC = {"+", "-", "*", "/", "%"}
 _ORDER = {"<", "<=", ">", ">="}
 _WORDS = {"number": "a number", "bool": "a boolean", "string": "a string", "null": "null"}
+# the SCXML event processor of `_ioprocessors.scxml.location` (the language's only path into it)
+_PROCESSOR = expr.Attr(obj=expr.System(name="_ioprocessors"), name="scxml")
 
 
 def category(type_name: str | None, datatypes: set[str]) -> str | None:
@@ -98,6 +100,8 @@ class _Typer:
             return "string" if e.name in ("_sessionid", "_name") else None
         if isinstance(e, expr.Attr) and isinstance(e.obj, expr.System):
             return None if e.name == "data" or e.obj.name != "_event" else "string"
+        if isinstance(e, expr.Attr) and e.obj == _PROCESSOR:  # _ioprocessors.scxml.location
+            return "string"
         if isinstance(e, expr.Attr):
             return self._attr(e)
         if isinstance(e, expr.Unary):

@@ -32,6 +32,7 @@ _LEVELS: tuple[dict[str, str], ...] = (  # lowest precedence first: JS operator 
     {"*": "*", "/": "/", "%": "%"},
 )
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
 _MARKERS = {"$sg.tick": "tick", "$sg.spin": "spin"}
 
 
@@ -289,6 +290,8 @@ class _Parser:
             field = _string(field)
         else:
             raise ExprUnsupported("_event.data is only read field by field")
+        if obj == expr.System(name="_ioprocessors") and field in (_PROCESSOR, "scxml"):
+            field = "scxml"  # the SCXML event processor, by its URI or its short name
         if not _IDENT.fullmatch(field):
             raise ExprUnsupported(f"member name {field!r} is not an identifier")
         if first:

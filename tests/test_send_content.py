@@ -1,0 +1,64 @@
+"""Issue 15's send and data features, the same trace in asyncio, smach and the emitted SCXML
+run in Qt SCXML: `_ioprocessors.scxml.location` (W3C's `_ioprocessors[<processor>].location`),
+`raise (expr)` (`<send eventexpr>`), `raise e(expr)` (`<send>` with `<content>`: the event's
+data is the value) and `<data src>` read when the document is compiled."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from swarmgen import expr, replay
+
+BACKENDS = ("asyncio", "smach", "scxml")
+
+PROCESSORS = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Io">
+  <datamodel>
+    <data id="where" expr="_ioprocessors['http://www.w3.org/TR/scxml/#SCXMLEventProcessor'].location"/>
+    <data id="own" expr="''"/>
+  </datamodel>
+  <state id="s0">
+    <transition event="go" cond="where == '#_scxml_' + _sessionid" target="s1">
+      <assign location="own" expr="_ioprocessors.scxml.location"/>
+    </transition>
+  </state>
+  <state id="s1"><transition event="go" cond="own == where" target="pass"/></state>
+  <final id="pass"/>
+</scxml>
+"""
+
+
+def _agree(
+    tmp_path: Path, document: str, name: str, steps: list[dict[str, object]]
+) -> list[dict[str, object]]:
+    source = tmp_path / f"{name}.scxml"
+    source.write_text(document, encoding="utf-8")
+    traces = {b: replay.replay(source, name, steps, b) for b in BACKENDS}
+    for backend, trace in traces.items():
+        if backend != "scxml":  # the session id is each engine's own string: compared apart
+            assert _no_session(trace) == _no_session(traces["scxml"]), (
+                f"{backend} differs from Qt SCXML:\n{trace}"
+            )
+    return traces["scxml"]
+
+
+def _no_session(trace: list[dict[str, object]]) -> list[object]:
+    return [{k: v for k, v in step.items() if k != "data"} for step in trace]
+
+
+def test_the_language_reads_the_processor_location() -> None:
+    value = expr.parse_expr("_ioprocessors.scxml.location")
+    assert expr.to_text(value) == "_ioprocessors.scxml.location"
+    # Qt SCXML names the processor `scxml` only (W3C's URI key is undefined there)
+    assert expr.to_ecmascript(value) == "_ioprocessors.scxml.location"
+    for bad in ("_ioprocessors.http", "_ioprocessors.scxml", "_ioprocessors.scxml.foo"):
+        with pytest.raises(expr.ExprError):
+            expr.parse_expr(bad)
+
+
+def test_the_processor_location_is_this_session(tmp_path: Path, qt_available: None) -> None:
+    # (sending to it is compared on the engine only: Qt SCXML drops what a document sends to its
+    # own session in the replay harness, docs/semantics.md "Targets"; IRP test 501)
+    trace = _agree(tmp_path, PROCESSORS, "Io", [{"event": "go"}, {"event": "go"}])
+    assert trace[-1]["active"] == ["pass_"]
