@@ -22,7 +22,11 @@ def _sent_by_members(model: Model) -> set[str]:
         for placed in walk(machine):
             if isinstance(placed.vertex, State):
                 actions += [*placed.vertex.entry, *placed.vertex.exit]
-        sent |= {a.event for a in expr.flat(actions) if isinstance(a, expr.Raise | expr.Send)}
+        sent |= {
+            a.event
+            for a in expr.flat(actions)
+            if isinstance(a, expr.Raise | expr.Send) and a.event is not None
+        }  # (a computed name, `raise (expr)`, is none of them in particular)
     return sent
 
 

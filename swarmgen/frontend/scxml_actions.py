@@ -111,21 +111,7 @@ class Actions:
         for block in children(node, "donedata"):
             contents = children(block, "content")
             if contents:  # the whole data: `done(expr)`
-                content = contents[0]
-                text = content.get("expr")
-                if text is None and not len(content):  # inline: JSON, else the text itself
-                    inline = (content.text or "").strip()
-                    try:
-                        constant = literal(inline)
-                    except ExprUnsupported:
-                        constant = inline
-                    if not isinstance(constant, bool | int | float | str) or constant is None:
-                        constant = inline
-                    text = expr.to_ecmascript(expr.Const(value=constant))
-                value = self.text(text, content) if text is not None else None
-                if value is None and len(content):
-                    why = "a <content> is an expression, not XML"
-                    self.b.report(dg.SCXML_UNSUPPORTED, content, element="content", why=why)
+                value = self.content(contents[0])
                 found += [f"done({value})"] if value is not None else []
                 continue
             fields = []
@@ -138,6 +124,25 @@ class Actions:
                     fields.append(f"{param.get('name')} = {value}")
             found.append(f"done({', '.join(fields)})")
         return found
+
+    def content(self, content: etree._Element) -> str | None:
+        """A `<content>`'s value as the language's expression: its `expr`, or its inline text
+        (JSON, else the text itself as a string); XML content is reported (None)."""
+        text = content.get("expr")
+        if text is None and not len(content):  # inline: JSON, else the text itself
+            inline = (content.text or "").strip()
+            try:
+                constant = literal(inline)
+            except ExprUnsupported:
+                constant = inline
+            if not isinstance(constant, bool | int | float | str) or constant is None:
+                constant = inline
+            text = expr.to_ecmascript(expr.Const(value=constant))
+        value = self.text(text, content) if text is not None else None
+        if value is None and len(content):
+            why = "a <content> is an expression, not XML"
+            self.b.report(dg.SCXML_UNSUPPORTED, content, element="content", why=why)
+        return value
 
     def timer(self, node: etree._Element) -> bool:
         """`<send event="after.S.n" id=... delay="Nms"/>`: the emitted time-event pattern."""
@@ -393,7 +398,18 @@ class Actions:
             value = self.text(source, param)
             if value is not None:
                 fields.append(f"{param.get('name')} = {value}")
-        event = self.event_name(str(node.get("event", "")))
+        computed = node.get("eventexpr") if verb == "raise" else None
+        if computed is not None:  # W3C's eventexpr: `raise (expr)`
+            named = self.text(computed, node)
+            if named is None:
+                return []
+            event = f"({named})"
+        else:
+            event = self.event_name(str(node.get("event", "")))
+        contents = children(node, "content") if verb == "raise" else []
+        if contents:  # the event's whole data: `raise e(expr)`
+            value = self.content(contents[0])
+            return [f"{verb} {event}({value})"] if value is not None else []
         return [f"{verb} {event}({', '.join(fields)})" if fields else f"{verb} {event}"]
 
     def effect(
@@ -482,7 +498,6 @@ _LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
 # what swarmgen's emitter writes for a computed delay (docs/scxml.md)
 _OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
 _PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
-_UNREAD_SEND = ("eventexpr",)
 _HTTP = "http://www.w3.org/TR/scxml/#BasicHTTPEventProcessor"
 
 
@@ -491,8 +506,10 @@ def _unread_send(node: etree._Element) -> str | None:
     sendid = node.get("id")
     if node.get("type") in (_HTTP, "basichttp"):
         return "swarmgen has no Basic HTTP event I/O processor"
-    if any(node.get(a) is not None for a in _UNREAD_SEND) or children(node, "content"):
-        return "eventexpr and <content> are not in the IR yet"
+    if node.get("event") is not None and node.get("eventexpr") is not None:
+        return "event and eventexpr exclude each other"
+    if children(node, "content") and (node.get("namelist") or children(node, "param")):
+        return "a <content> excludes namelist and <param> (W3C 6.2)"
     location = node.get("idlocation")
     if location is not None and (not location.isidentifier() or location.startswith("_")):
         return "an idlocation is a data id"
