@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from swarmgen import expr, replay
+from swarmgen import expr, pipeline, replay
 
 BACKENDS = ("asyncio", "smach", "scxml")
 
@@ -119,3 +119,56 @@ def test_computed_names_and_content_agree_in_every_backend(
         "xs": [1, 2],
     }  # numbers stay numbers
     assert trace[-1]["active"] == ["pass_"]
+
+
+SOURCED = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Src">
+  <datamodel>
+    <data id="level" src="file:level.json"/>
+    <data id="tag" src="tag.txt"/>
+  </datamodel>
+  <state id="s0"><transition event="go" cond="level == 42 &amp;&amp; tag == 'alpha'" target="pass"/></state>
+  <final id="pass"/>
+</scxml>
+"""
+
+
+def test_data_src_is_read_when_compiled(tmp_path: Path, qt_available: None) -> None:
+    (tmp_path / "level.json").write_text("42\n", encoding="utf-8")
+    (tmp_path / "tag.txt").write_text(
+        "'alpha'", encoding="utf-8"
+    )  # as inline content: an expression
+    trace = _agree(tmp_path, SOURCED, "Src", [{"event": "go"}])
+    assert trace[0]["data"] == {"level": 42, "tag": "alpha"}
+    assert trace[-1]["active"] == ["pass_"]
+
+
+@pytest.mark.parametrize(
+    ("src", "why"),
+    [
+        ("file:../secret.txt", "outside the document's directory"),
+        ("file:///etc/hostname", "only a relative file: URI"),
+        ("/etc/hostname", "an absolute path"),
+        ("http://example.org/x", "only a relative file: URI"),
+        ("file:missing.txt", "no such file"),
+        ("file:big.txt", "at most 65536 bytes"),
+        ("file:link.txt", "outside the document's directory"),
+    ],
+)
+def test_data_src_reads_only_small_files_beside_the_document(
+    tmp_path: Path, src: str, why: str
+) -> None:
+    home = tmp_path / "doc"
+    home.mkdir()
+    (tmp_path / "secret.txt").write_text("1", encoding="utf-8")
+    (home / "big.txt").write_text("1" * 70_000, encoding="utf-8")
+    (home / "link.txt").symlink_to(tmp_path / "secret.txt")
+    source = home / "m.scxml"
+    source.write_text(
+        '<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0">\n'
+        f'  <datamodel>\n    <data id="x" src="{src}"/>\n  </datamodel>\n'
+        '  <state id="s0"/>\n</scxml>\n',
+        encoding="utf-8",
+    )
+    found = [d for d in pipeline.validate(source).diagnostics if d.code.id == "SG061"]
+    assert len(found) == 1 and why in found[0].message, found
+    assert (found[0].span.line, found[0].span.col) == (3, 5)  # at the <data>

@@ -13,6 +13,7 @@ within the bounds; a document the front end refuses is `not-run` with the featur
 from __future__ import annotations
 
 import heapq
+import shutil
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -229,4 +230,6 @@ def run_all(irp: Path, transform: etree.XSLT | None = None) -> dict[str, Outcome
     """Every automatic test's outcome on swarmgen's engine, by test id."""
     transform = transform or stylesheet()
     with tempfile.TemporaryDirectory(prefix="swarmgen-irp-") as tmp:
+        for data in (irp / "txml").glob("*.txt"):  # `<data src>`'s files, beside the documents
+            shutil.copy(data, Path(tmp) / data.name)
         return {t.id: run_test(transform, t, Path(tmp)) for t in tests(irp)}

@@ -21,6 +21,7 @@ from swarmgen.frontend.safexml import InputError
 from swarmgen.frontend.scxml_actions import Actions
 from swarmgen.frontend.scxml_expr import ExprUnsupported, literal
 from swarmgen.frontend.scxml_raw import PRIMITIVES, Builder, children, in_scxml, in_sg, local, sg
+from swarmgen.frontend.scxml_src import inline_src
 from swarmgen.frontend.scxml_states import States
 
 DATAMODELS = ("ecmascript", "null", "swarmgen")
@@ -231,15 +232,17 @@ class _Document:
 
     def datamodel(self, owner: RawElement) -> None:
         for data in self.data_nodes(report=True):
+            if data.get("src") is not None and not inline_src(self.b, data):
+                continue  # reported; else the file's text is its inline content now
             ident = str(data.get("id", ""))
             content = (data.text or "").strip()
-            if data.get("src") is not None or len(data) or (content and data.get("expr")):
+            if len(data) or (content and data.get("expr")):
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,
                     data,
                     "attribute",
-                    attribute="src",
-                    value=data.get("src") or "content",
+                    attribute="content",
+                    value="XML" if len(data) else content[:200],
                     element="data",
                     why="only expr gives a datum's value",
                 )
