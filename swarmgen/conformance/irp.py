@@ -99,6 +99,9 @@ def leftover(document: bytes) -> str | None:
 def run_test(transform: etree.XSLT, test: Test, work: Path) -> Outcome:
     """A test's result: every start document must pass (403a/b/c); the first other wins."""
     for txml in test.documents:
+        for data in txml.parent.glob(f"{txml.stem}*.txt"):  # `<data src>`'s, beside it
+            if not (work / data.name).exists():
+                shutil.copy(data, work / data.name)
         outcome = run_document(convert(transform, txml), work / f"{txml.stem}.scxml")
         if outcome.result != "pass":
             return outcome
@@ -230,6 +233,4 @@ def run_all(irp: Path, transform: etree.XSLT | None = None) -> dict[str, Outcome
     """Every automatic test's outcome on swarmgen's engine, by test id."""
     transform = transform or stylesheet()
     with tempfile.TemporaryDirectory(prefix="swarmgen-irp-") as tmp:
-        for data in (irp / "txml").glob("*.txt"):  # `<data src>`'s files, beside the documents
-            shutil.copy(data, Path(tmp) / data.name)
         return {t.id: run_test(transform, t, Path(tmp)) for t in tests(irp)}

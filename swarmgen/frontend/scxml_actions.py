@@ -127,16 +127,17 @@ class Actions:
 
     def content(self, content: etree._Element) -> str | None:
         """A `<content>`'s value as the language's expression: its `expr`, or its inline text
-        (JSON, else the text itself as a string); XML content is reported (None)."""
+        (JSON, else the text itself as a space-normalized string, W3C B.2.2); XML content is
+        reported (None)."""
         text = content.get("expr")
         if text is None and not len(content):  # inline: JSON, else the text itself
             inline = (content.text or "").strip()
             try:
                 constant = literal(inline)
             except ExprUnsupported:
-                constant = inline
+                constant = None
             if not isinstance(constant, bool | int | float | str) or constant is None:
-                constant = inline
+                constant = " ".join(inline.split())
             text = expr.to_ecmascript(expr.Const(value=constant))
         value = self.text(text, content) if text is not None else None
         if value is None and len(content):
