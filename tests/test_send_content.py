@@ -172,3 +172,24 @@ def test_data_src_reads_only_small_files_beside_the_document(
     found = [d for d in pipeline.validate(source).diagnostics if d.code.id == "SG061"]
     assert len(found) == 1 and why in found[0].message, found
     assert (found[0].span.line, found[0].span.col) == (3, 5)  # at the <data>
+
+
+FIELDED = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Js">
+  <datamodel><data id="got" expr="''"/><data id="size" expr="0"/></datamodel>
+  <state id="s0">
+    <onentry><send event="foo" delay="10ms"><content>{"productName": "bar", "size": 27}</content></send></onentry>
+    <transition event="foo" cond="_event.data.productName == 'bar'" target="s1">
+      <assign location="got" expr="_event.data.productName"/><assign location="size" expr="_event.data.size"/>
+    </transition>
+  </state>
+  <state id="s1"><transition event="go" target="pass"/></state>
+  <final id="pass"/>
+</scxml>
+"""
+
+
+def test_a_json_object_content_is_the_events_fields(tmp_path: Path, qt_available: None) -> None:
+    """W3C B.2.2: JSON content is the value; an object's members are swarmgen's event fields."""
+    trace = _agree(tmp_path, FIELDED, "Js", [{"wait": 20}, {"event": "go"}])
+    assert trace[1]["data"] == {"got": "bar", "size": 27}
+    assert trace[-1]["active"] == ["pass_"]

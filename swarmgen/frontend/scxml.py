@@ -19,7 +19,7 @@ from swarmgen.frontend import scxml_cpswarm
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError
 from swarmgen.frontend.scxml_actions import Actions
-from swarmgen.frontend.scxml_expr import ExprUnsupported, literal
+from swarmgen.frontend.scxml_expr import ExprUnsupported, json_fields, literal
 from swarmgen.frontend.scxml_raw import PRIMITIVES, Builder, children, in_scxml, in_sg, local, sg
 from swarmgen.frontend.scxml_src import inline_src
 from swarmgen.frontend.scxml_states import States
@@ -340,6 +340,7 @@ class _Document:
                     for p in node
                     if isinstance(p.tag, str) and local(p) == "param"
                 ] + str(node.get("namelist", "")).split()  # a namelist's data ids are fields
+                params += _content_fields(node)
             for name in names:
                 if (
                     name
@@ -469,3 +470,11 @@ _PLATFORM = {"done", "error", "outcome", "after"}
 _FIELD_READ = re.compile(
     r'_event\.data\.([A-Za-z_][A-Za-z0-9_]*)|\$sg\.field\(_event,\s*"([^"]+)"\)'
 )
+
+
+def _content_fields(send: etree._Element) -> list[str]:
+    """The fields a `<send>`'s inline JSON-object `<content>` gives (`json_fields`)."""
+    content = children(send, "content")
+    if not content or len(content[0]) or content[0].get("expr") is not None:
+        return []
+    return [name for name, _ in json_fields(content[0].text or "") or []]

@@ -17,6 +17,7 @@ from swarmgen.frontend.scxml_expr import (
     InState,
     Marker,
     conjuncts,
+    json_fields,
     literal,
     translate,
 )
@@ -408,6 +409,10 @@ class Actions:
         else:
             event = self.event_name(str(node.get("event", "")))
         contents = children(node, "content") if verb == "raise" else []
+        inline = (contents[0].text or "") if contents and not len(contents[0]) else ""
+        fielded = json_fields(inline) if contents and contents[0].get("expr") is None else None
+        if fielded is not None:  # a JSON object: the event's fields, `raise e(f = v, ...)`
+            return [f"{verb} {event}({', '.join(f'{n} = {v}' for n, v in fielded)})"]
         if contents:  # the event's whole data: `raise e(expr)`
             value = self.content(contents[0])
             return [f"{verb} {event}({value})"] if value is not None else []

@@ -118,6 +118,29 @@ def literal(text: str) -> object:
     raise ExprUnsupported("not a literal value")
 
 
+def json_fields(text: str) -> list[tuple[str, str]] | None:
+    """(name, value as the language's text) of each member of a JSON object whose names are identifiers and whose
+    values are scalars (an event's data sent as `<content>{"f": 1}</content>`: its fields), or
+    None when the text is no such object."""
+    try:
+        found = json.loads(text)
+    except ValueError:
+        return None
+    if not isinstance(found, dict) or not found:
+        return None
+    fields = []
+    for name, value in found.items():
+        if not _IDENT.fullmatch(name) or name.startswith("__"):
+            return None
+        if value is None or not isinstance(value, bool | int | float | str):
+            return None
+        try:
+            fields.append((name, expr.to_text(expr.Const(value=value))))
+        except ValueError:  # a value the language cannot hold exactly
+            return None
+    return fields
+
+
 class _Parser:
     def __init__(
         self, toks: list[tuple[str, str]], name: Callable[[str], str], allow_markers: bool = False
