@@ -193,3 +193,40 @@ def test_a_json_object_content_is_the_events_fields(tmp_path: Path, qt_available
     trace = _agree(tmp_path, FIELDED, "Js", [{"wait": 20}, {"event": "go"}])
     assert trace[1]["data"] == {"got": "bar", "size": 27}
     assert trace[-1]["active"] == ["pass_"]
+
+
+ROUND = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Rt">
+  <datamodel><data id="which" expr="'foo'"/><data id="n" expr="0"/></datamodel>
+  <state id="s0">
+    <onentry>
+      <send eventexpr="which" delay="10ms"/>
+      <send event="bar" target="#_internal"><content expr="n + 1"/></send>
+    </onentry>
+    <transition event="foo" target="s1"><assign location="n" expr="_event.data"/></transition>
+    <transition event="bar" target="s1"/>
+  </state>
+  <state id="s1"/>
+</scxml>
+"""
+
+
+def test_emitted_computed_names_and_values_read_back(tmp_path: Path) -> None:
+    """The emitted `eventexpr` and `$sg.content(...)` read back as `raise (n)`/`raise e(v)`:
+    the document, and its XMI conversion, compile to the same SCXML again."""
+    source = tmp_path / "Rt.scxml"
+    source.write_text(ROUND, encoding="utf-8")
+
+    def body(path: Path) -> list[str]:
+        files = pipeline.compile_model(path, ["scxml"]).files
+        text = next(t for p, t in files.items() if p.suffix == ".scxml")
+        return [line for line in text.splitlines() if "@generated" not in line]
+
+    emitted = tmp_path / "emitted.scxml"
+    emitted.write_text("\n".join(body(source)), encoding="utf-8")
+    assert 'eventexpr="which"' in emitted.read_text(encoding="utf-8")
+    assert body(emitted) == body(source)
+    xmi = pipeline.convert_model(emitted).xmi
+    assert xmi is not None and b"raise (which)" in xmi and b"raise bar(n + 1)" in xmi
+    converted = tmp_path / "converted.xmi"
+    converted.write_bytes(xmi)
+    assert body(converted) == body(source)

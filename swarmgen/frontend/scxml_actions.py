@@ -129,8 +129,10 @@ class Actions:
     def content(self, content: etree._Element) -> str | None:
         """A `<content>`'s value as the language's expression: its `expr`, or its inline text
         (JSON, else the text itself as a space-normalized string, W3C B.2.2); XML content is
-        reported (None)."""
+        reported (None); swarmgen's own `$sg.content(e)` is read back as `e`."""
         text = content.get("expr")
+        own = _OWN_CONTENT.fullmatch(text) if text is not None else None
+        text = own.group(1) if own is not None else text
         if text is None and not len(content):  # inline: JSON, else the text itself
             inline = (content.text or "").strip()
             try:
@@ -503,6 +505,7 @@ class Actions:
 _LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
 # what swarmgen's emitter writes for a computed delay (docs/scxml.md)
 _OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
+_OWN_CONTENT = re.compile(r"\$sg\.content\((.*)\)", re.DOTALL)  # the emitter's (docs/scxml.md)
 _PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
 _HTTP = "http://www.w3.org/TR/scxml/#BasicHTTPEventProcessor"
 
