@@ -230,3 +230,21 @@ def test_emitted_computed_names_and_values_read_back(tmp_path: Path) -> None:
     converted = tmp_path / "converted.xmi"
     converted.write_bytes(xmi)
     assert body(converted) == body(source)
+
+
+DONE_VALUE = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Dn">
+  <datamodel><data id="n" expr="0"/></datamodel>
+  <state id="s0" initial="a">
+    <state id="a"><transition event="go" target="b"/></state>
+    <final id="b"><donedata><content expr="40 + 2"/></donedata></final>
+    <transition event="done.state.s0" target="s1"><assign location="n" expr="_event.data"/></transition>
+  </state>
+  <state id="s1"/>
+</scxml>
+"""
+
+
+def test_done_values_stay_numbers_in_qt(tmp_path: Path, qt_available: None) -> None:
+    """`done(value)` goes through `$sg.content` too: Qt SCXML gave the number 42 as "42"."""
+    trace = _agree(tmp_path, DONE_VALUE, "Dn", [{"event": "go"}])
+    assert trace[-1]["data"] == {"n": 42}

@@ -179,8 +179,9 @@ class _Writer:
         self.onexit(element, node)
         if node.donedata:  # a final state's: the fields of its done.state event
             self.params(_sub(element, "donedata"), node.donedata, "param")
-        elif node.donecontent is not None:  # or its whole data
-            _sub(_sub(element, "donedata"), "content", {"expr": self.js(node.donecontent)})
+        elif node.donecontent is not None:  # or its whole data (as `raise e(value)`'s)
+            value = f"$sg.content({self.js(node.donecontent)})"  # CONTENT_SCRIPT
+            _sub(_sub(element, "donedata"), "content", {"expr": value})
         if node.call is not None:
             self.finalize(element, node.id, node.call)
         for transition in node.transitions:
@@ -442,8 +443,9 @@ def _literal_ms(delay: c.Delay) -> int | None:
 
 
 def _sends_content(chart: c.Chart) -> bool:
-    """Whether some `raise e(value)` sends a value as its event's data (`CONTENT_SCRIPT`)."""
-    return any(
+    """Whether some `raise e(value)` or `done(value)` sends a value as its event's data
+    (`CONTENT_SCRIPT`)."""
+    return any(n.donecontent is not None for n in chart.walk()) or any(
         isinstance(a, c.Raise) and a.content is not None
         for n in chart.walk()
         for a in c.flat(_actions_of(n))
