@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from swarmgen import expr, pipeline, replay
+from tests.skips import requires_rclpy
 
 BACKENDS = ("asyncio", "smach", "scxml")
 
@@ -248,3 +249,30 @@ def test_done_values_stay_numbers_in_qt(tmp_path: Path, qt_available: None) -> N
     """`done(value)` goes through `$sg.content` too: Qt SCXML gave the number 42 as "42"."""
     trace = _agree(tmp_path, DONE_VALUE, "Dn", [{"event": "go"}])
     assert trace[-1]["data"] == {"n": 42}
+
+
+IMMEDIATE = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s0" name="Rc">
+  <datamodel><data id="n" expr="0"/><data id="got" expr="''"/></datamodel>
+  <state id="s0">
+    <onentry><send eventexpr="'ba' + 'z'" target="#_internal"><content expr="[1, 2]"/></send></onentry>
+    <transition event="baz" target="s1"><assign location="got" expr="_event.name"/></transition>
+  </state>
+  <state id="s1">
+    <onentry><send event="qux" target="#_internal"><content>7</content></send></onentry>
+    <transition event="qux" target="s2"><assign location="n" expr="_event.data"/></transition>
+  </state>
+  <state id="s2"/>
+</scxml>
+"""
+
+
+@requires_rclpy
+def test_the_rclpy_host_agrees(tmp_path: Path, qt_available: None) -> None:
+    """The ROS 2 node's host gives the same trace. Sends without a delay only: in the rclpy
+    replay a send delayed 10 ms had not arrived after two 10 ms waits, a plain `<send event
+    delay>` as well (not this feature's; left to look at)."""
+    source = tmp_path / "Rc.scxml"
+    source.write_text(IMMEDIATE, encoding="utf-8")
+    traces = {b: replay.replay(source, "Rc", [{"wait": 10}], b) for b in ("rclpy", *BACKENDS)}
+    assert all(trace == traces["scxml"] for trace in traces.values()), traces
+    assert traces["rclpy"][0]["data"] == {"got": "baz", "n": 7}
