@@ -268,9 +268,8 @@ IMMEDIATE = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" init
 
 @requires_rclpy
 def test_the_rclpy_host_agrees(tmp_path: Path, qt_available: None) -> None:
-    """The ROS 2 node's host gives the same trace. Sends without a delay only: in the rclpy
-    replay a send delayed 10 ms had not arrived after two 10 ms waits, a plain `<send event
-    delay>` as well (not this feature's; left to look at)."""
+    """The ROS 2 node's host gives the same trace. Sends without a delay only: the rclpy
+    replay is isolated, with timers off, so it runs no delayed send (`Node.start_delayed`)."""
     source = tmp_path / "Rc.scxml"
     source.write_text(IMMEDIATE, encoding="utf-8")
     traces = {b: replay.replay(source, "Rc", [{"wait": 10}], b) for b in ("rclpy", *BACKENDS)}
