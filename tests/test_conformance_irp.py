@@ -6,6 +6,7 @@ does is a regression; any other change means the results must be regenerated
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -90,6 +91,8 @@ def _swapped(txml: Path, out: Path) -> Path:
             element.set(fail if name == pass_ else pass_, value)
     swapped = out / txml.name
     tree.write(str(swapped))
+    for data in txml.parent.glob(f"{txml.stem}*.txt"):  # its `<data src>` files go with it
+        shutil.copy(data, out / data.name)
     return swapped
 
 

@@ -290,8 +290,21 @@ ERRORS: list[tuple[Callable[[str], object], str, str, int, str | None]] = [
     (parse_actions, "send (x)", "expected an event name after 'send'", 5, None),
     (parse_actions, "raise e .x", "unexpected token '.'", 8, None),
     (parse_actions, "raise e(a = 1, a = 2)", "duplicate argument 'a'", 15, None),
-    (parse_actions, "raise e(1)", "expected an argument `name = expression`, found '1'", 8, None),
-    (parse_actions, "raise e(a)", "expected '=' after argument name 'a'", 9, "field = expression"),
+    # (`raise e(1)` is the event with the value 1 as its data: `raise e(value)`, W3C <content>)
+    (
+        parse_actions,
+        "raise e(a = 1, 2)",
+        "expected an argument `name = expression`, found '2'",
+        15,
+        None,
+    ),
+    (
+        parse_actions,
+        "raise e(a = 1, b)",
+        "expected '=' after argument name 'b'",
+        16,
+        "field = expression",
+    ),
     (parse_actions, "raise e(a = 1", "missing ')'", 13, None),
     (parse_actions, "else", "`else` is only allowed as a whole guard", 0, None),
     (parse_bindings, "x", "a binding must be `name = expression`", 0, None),

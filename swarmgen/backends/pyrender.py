@@ -220,16 +220,21 @@ class ChartRenderer:
             method = "raise_event" if isinstance(action, c.Raise) else "send"
             data = "{" + ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in action.params) + "}"
             data = data if action.params else "None"
+            if isinstance(action, c.Raise) and action.named is not None and not action.params:
+                data = "{}"  # `<send eventexpr target="#_internal">`: the external queue
+            if isinstance(action, c.Raise) and action.content is not None:
+                data = _unwrap(self.py(action.content))  # the event's whole data
             if isinstance(action, c.Raise) and (action.via is not None or action.into is not None):
                 return [self._through(action, data)]
+            name = self._event_of(action)
             if isinstance(action, c.Raise) and action.target is not None:
                 target = _unwrap(self.py(action.target))
                 ms = self._delay_ms(action.delay) if action.delay is not None else "0"
-                call = f"ctx.raise_to({action.event!r}, {data}, {target}, {ms}, {action.sendid!r})"
+                call = f"ctx.raise_to({name}, {data}, {target}, {ms}, {action.sendid!r})"
                 return [call]
             if isinstance(action, c.Raise) and action.delay is not None:
                 return [self._delayed(action, action.delay, data)]
-            return [f"ctx.{method}({action.event!r}, {data})"]
+            return [f"ctx.{method}({name}, {data})"]
         if isinstance(action, c.Cancel) and action.expr is not None:
             return [f"ctx.cancel({_unwrap(self.py(action.expr))})"]
         if isinstance(action, c.Cancel):
@@ -269,7 +274,14 @@ class ChartRenderer:
     def _delayed(self, action: c.Raise, delay: c.Delay, data: str) -> str:
         """`raise e after ...` with its delay in milliseconds."""
         ms = self._delay_ms(delay)
-        return f"ctx.raise_later({action.event!r}, {data}, {ms}, {action.sendid!r})"
+        return f"ctx.raise_later({self._event_of(action)}, {data}, {ms}, {action.sendid!r})"
+
+    def _event_of(self, action: c.Raise | c.Send) -> str:
+        """The event's name as Python: its literal, or `ctx.event_name(...)` checking the
+        computed one (`raise (expr)`, W3C's eventexpr) when the action runs."""
+        if isinstance(action, c.Raise) and action.named is not None:
+            return f"ctx.event_name({_unwrap(self.py(action.named))})"
+        return repr(action.event)
 
     def _through(self, action: c.Raise, data: str) -> str:
         """`raise e ... via p` / `into v`: ctx.raise_via (the engine writes the send id to
@@ -278,7 +290,7 @@ class ChartRenderer:
         ms = self._delay_ms(action.delay) if action.delay is not None else "None"
         via = _unwrap(self.py(action.via)) if action.via is not None else "None"
         options = f"({target}, {ms}, {action.sendid!r}, {via})"
-        return f"ctx.raise_via({action.event!r}, {data}, {options}, {action.into!r})"
+        return f"ctx.raise_via({self._event_of(action)}, {data}, {options}, {action.into!r})"
 
     def _delay_ms(self, delay: c.Delay) -> str:
         """A delay as Python computing milliseconds."""

@@ -151,6 +151,8 @@ def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str
                     action.delay.amount if action.delay else None,
                     action.target,
                     action.via,
+                    action.named,
+                    action.content,
                 )
                 for value in computed:
                     read |= _names(value, ids) if value is not None else set()

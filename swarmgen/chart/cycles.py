@@ -57,8 +57,8 @@ def raised(actions: Iterable[Action]) -> set[str]:
     return {
         a.event
         for a in flat(tuple(actions))
-        if isinstance(a, Raise) and a.delay is None and a.target is None
-    }
+        if isinstance(a, Raise) and a.delay is None and a.target is None and a.event
+    }  # (a computed name, `raise (expr)`, is "": unknown here)
 
 
 def matches(descriptor: str, prefixes: set[str]) -> bool:

@@ -65,8 +65,8 @@ def _action_exprs(action: c.Action) -> list[expr.Expr]:
             found.append(action.delay.amount)
         if isinstance(action, c.Raise) and action.target is not None:
             found.append(action.target)
-        if isinstance(action, c.Raise) and action.via is not None:
-            found.append(action.via)
+        if isinstance(action, c.Raise):
+            found += [e for e in (action.via, action.named, action.content) if e is not None]
         return found
     return []
 
@@ -118,6 +118,16 @@ def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action
             delay = replace(action.delay, amount=fix(action.delay.amount)) if action.delay else None
             target = fix(action.target) if action.target is not None else None
             via = fix(action.via) if action.via is not None else None
-            return replace(action, params=params, delay=delay, target=target, via=via)
+            named = fix(action.named) if action.named is not None else None
+            content = fix(action.content) if action.content is not None else None
+            return replace(
+                action,
+                params=params,
+                delay=delay,
+                target=target,
+                via=via,
+                named=named,
+                content=content,
+            )
         return replace(action, params=params)
     return action

@@ -352,14 +352,15 @@ class _Lowering(Transitions):
         for machine in self.index.reachable_machines(self.root):
             for transition in machine.transitions:
                 names.update(t.name for t in transition.triggers if t.kind == TriggerKind.EVENT)
-                names.update(a.event for a in expr.flat(transition.effect) if _names_event(a))
+                names.update(a.event or "" for a in expr.flat(transition.effect) if _names_event(a))
             for placed in walk(machine):
                 if isinstance(placed.vertex, State):
                     actions = (*placed.vertex.entry, *placed.vertex.exit)
-                    names.update(a.event for a in expr.flat(actions) if _names_event(a))
+                    names.update(a.event or "" for a in expr.flat(actions) if _names_event(a))
         return [e for e in self.index.model.events if e.name in names]
 
 
 def _names_event(action: expr.Action) -> TypeGuard[expr.Raise | expr.Send]:
-    """Whether the action raises or sends an event (an assignment or `cancel` names none)."""
-    return isinstance(action, expr.Raise | expr.Send)
+    """Whether the action raises or sends a named event (an assignment or `cancel` names none,
+    nor does `raise (expr)`, whose name is computed)."""
+    return isinstance(action, expr.Raise | expr.Send) and action.event is not None

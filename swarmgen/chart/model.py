@@ -57,6 +57,8 @@ class Raise:
     target: expr.Expr | None = None  # W3C's <send target> (docs/semantics.md, "Targets")
     via: expr.Expr | None = None  # W3C's <send type|typeexpr> (docs/semantics.md, "Targets")
     into: str | None = None  # the datum (id) W3C's idlocation writes the generated send id to
+    named: expr.Expr | None = None  # W3C's <send eventexpr>: the name, computed (`event` "")
+    content: expr.Expr | None = None  # W3C's <send><content>: the event's whole data
 
 
 @dataclass(frozen=True, slots=True)

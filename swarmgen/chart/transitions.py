@@ -270,24 +270,33 @@ class Transitions(Context):
                 item = self._data_ident(action.item)
                 lowered.append(c.ForEach(action.array, item, index, inner))
                 continue
-            params = self._params(action.event, action.args)
             if isinstance(action, expr.Raise):
-                delay = action.delay
-                lowered.append(
-                    c.Raise(
-                        self._event_ident(action.event),
-                        params,
-                        c.Delay(delay.amount, delay.unit) if delay is not None else None,
-                        action.sendid,
-                        action.target,
-                        action.via,
-                        self._data_ident(action.into) if action.into is not None else None,
-                    )
-                )
+                lowered.append(self._raise(action))
             else:
+                params = self._params(action.event, action.args)
                 lowered.append(c.Send(self._event_ident(action.event), params))
         lowered += [c.Opaque(code.language or "unspecified", code.body) for code in opaque]
         return tuple(lowered)
+
+    def _raise(self, action: expr.Raise) -> c.Raise:
+        """A raise with its fields (or its content value), its event's runtime name ("" when
+        computed: `named`) and the options of W3C's `<send>`."""
+        delay = action.delay
+        if action.event is not None:
+            params = self._params(action.event, action.args)
+        else:  # `raise (expr)(f = ...)`: no declared event, so only the given fields
+            params = tuple(c.Param(identifier(a.name), a.value) for a in action.args)
+        return c.Raise(
+            self._event_ident(action.event) if action.event is not None else "",
+            params,
+            c.Delay(delay.amount, delay.unit) if delay is not None else None,
+            action.sendid,
+            action.target,
+            action.via,
+            self._data_ident(action.into) if action.into is not None else None,
+            action.named,
+            action.content,
+        )
 
     def _if(self, action: expr.If) -> c.If:
         """An `if` with each branch's actions lowered (outputs were read in `_actions`)."""

@@ -14,15 +14,19 @@ from swarmgen.names import dot_prefixes
 _UNWAITED = {"preempted"}
 
 
-def _sent_by_members(model: Model) -> set[str]:
-    """Events that effects send or raise, or that library behaviours emit (`emits` tag)."""
+def _sent_by_members(model: Model) -> set[str] | None:
+    """Events that effects send or raise, or that library behaviours emit (`emits` tag); None
+    when a member computes an event's name (`raise (expr)`): then any event may be sent."""
     sent = {name for b in model.behaviours for name in b.emits}
     for machine in model.machines:
         actions = [a for t in machine.transitions for a in t.effect]
         for placed in walk(machine):
             if isinstance(placed.vertex, State):
                 actions += [*placed.vertex.entry, *placed.vertex.exit]
-        sent |= {a.event for a in expr.flat(actions) if isinstance(a, expr.Raise | expr.Send)}
+        raised = [a for a in expr.flat(actions) if isinstance(a, expr.Raise | expr.Send)]
+        if any(a.event is None for a in raised):
+            return None
+        sent |= {a.event for a in raised if a.event is not None}
     return sent
 
 
@@ -30,7 +34,8 @@ def check_events(model: Model) -> list[Diagnostic]:
     """Report events nobody sends, events nobody handles and unhandled behaviour outcomes."""
     if not any(e.swarm_event for e in model.events):
         return []  # plain UML models: their environment sends the signals
-    sent = _sent_by_members(model)
+    members = _sent_by_members(model)
+    sent = members if members is not None else set()
     station = {e.name for e in model.events if e.sender == "station"}
     triggered: dict[str, list[object]] = {}
     found: list[Diagnostic] = []
@@ -41,7 +46,7 @@ def check_events(model: Model) -> list[Diagnostic]:
                 if trigger.kind != TriggerKind.EVENT:
                     continue
                 triggered.setdefault(trigger.name, []).append(trigger)
-                if trigger.name not in heard:
+                if trigger.name not in heard and members is not None:
                     found.append(dg.NEVER_SENT.at(trigger.span, event=trigger.name))
     for event in model.events:
         if (event.name in sent or event.name in station) and not (

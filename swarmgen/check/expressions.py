@@ -212,6 +212,8 @@ def _actions(
 def _event_use(
     index: ModelIndex, action: expr.Raise | expr.Send, span: Span, what: str
 ) -> list[Diagnostic]:
+    if action.event is None:  # `raise (expr)`: a name computed when it runs (any event's)
+        return []
     event = index.events_by_name.get(action.event)
     verb = "raises" if isinstance(action, expr.Raise) else "sends"
     if event is None:

@@ -286,6 +286,8 @@ class _Run:
                 and not action.args
                 and action.delay is None
                 and action.target is None
+                and action.event is not None  # (a computed name: unknown here)
+                and action.content is None
             ):
                 event = self.index.events_by_name.get(action.event)
                 if event is None or not event.fields:

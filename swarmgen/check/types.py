@@ -31,6 +31,8 @@ _CLASSES = {
 _ARITHMETIC = {"+", "-", "*", "/", "%"}
 _ORDER = {"<", "<=", ">", ">="}
 _WORDS = {"number": "a number", "bool": "a boolean", "string": "a string", "null": "null"}
+# the SCXML event processor of `_ioprocessors.scxml.location` (the language's only path into it)
+_PROCESSOR = expr.Attr(obj=expr.System(name="_ioprocessors"), name="scxml")
 
 
 def category(type_name: str | None, datatypes: set[str]) -> str | None:
@@ -98,6 +100,8 @@ class _Typer:
             return "string" if e.name in ("_sessionid", "_name") else None
         if isinstance(e, expr.Attr) and isinstance(e.obj, expr.System):
             return None if e.name == "data" or e.obj.name != "_event" else "string"
+        if isinstance(e, expr.Attr) and e.obj == _PROCESSOR:  # _ioprocessors.scxml.location
+            return "string"
         if isinstance(e, expr.Attr):
             return self._attr(e)
         if isinstance(e, expr.Unary):
@@ -273,10 +277,16 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
         if amount is not None and amount != wanted:
             needs = "a duration string" if not action.delay.unit else "a number"
             typer.errors.append(
-                f"the delay of '{action.event}' is {_word(amount)}, it needs {needs}"
+                f"the delay of '{expr.event_text(action)}' is {_word(amount)}, it needs {needs}"
             )
-    event = index.events_by_name.get(action.event)
+    event = index.events_by_name.get(action.event) if action.event is not None else None
     fields = {f.name: of(f, datatypes) for f in (event.fields if event else ())}
+    if isinstance(action, expr.Raise) and action.content is not None:
+        typer.infer(action.content)  # any value: the event's whole data
+        if fields:  # the value rule: an event declared with fields always carries them
+            typer.errors.append(
+                f"'{action.event}' has fields ({', '.join(fields)}): it carries them, not a value"
+            )
     for arg in action.args:
         value = typer.infer(arg.value)
         if not _compatible(fields.get(arg.name), value):
@@ -286,11 +296,14 @@ def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: se
 
 
 def _send_options(typer: _Typer, action: expr.Raise) -> None:
-    """`to` and `via` take strings; `into` writes a string (the send id) to its datum."""
-    for word, value in (("target", action.target), ("I/O processor", action.via)):
+    """`to`, `via` and a computed name take strings; `into` writes a string (the send id) to
+    its datum."""
+    options = (("target", action.target), ("I/O processor", action.via), ("name", action.named))
+    for word, value in options:
         found = typer.infer(value) if value is not None else None
         if found is not None and found != "string":
-            typer.errors.append(f"the {word} of '{action.event}' is {_word(found)}, not a string")
+            event = expr.event_text(action)
+            typer.errors.append(f"the {word} of '{event}' is {_word(found)}, not a string")
     if action.into is not None and not _compatible(typer.scope.names.get(action.into), "string"):
         datum = typer.scope.names.get(action.into) or ""
         typer.errors.append(f"'{action.into}' is {_word(datum)}, given a send id (a string)")

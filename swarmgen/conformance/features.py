@@ -53,6 +53,8 @@ def feature(diagnostic: Diagnostic, root: etree._Element | None = None) -> str:
     if code == "SG112":
         name = _between(message, "uses '", "',")
         return "data in a state's <datamodel>" if name.startswith("Var") else _expression(name)
+    if code == "SG061" and message.startswith("src="):
+        return "data src/content"
     if code == "SG061" and "is not an element of SCXML" in message:
         return "XML content (data, assign, send)"
     if code != "SG060":

@@ -13,6 +13,7 @@ within the bounds; a document the front end refuses is `not-run` with the featur
 from __future__ import annotations
 
 import heapq
+import shutil
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -98,6 +99,9 @@ def leftover(document: bytes) -> str | None:
 def run_test(transform: etree.XSLT, test: Test, work: Path) -> Outcome:
     """A test's result: every start document must pass (403a/b/c); the first other wins."""
     for txml in test.documents:
+        for data in txml.parent.glob(f"{txml.stem}*.txt"):  # `<data src>`'s, beside it
+            if not (work / data.name).exists():
+                shutil.copy(data, work / data.name)
         outcome = run_document(convert(transform, txml), work / f"{txml.stem}.scxml")
         if outcome.result != "pass":
             return outcome

@@ -13,6 +13,7 @@ from collections import Counter
 from collections.abc import Mapping
 from typing import Any
 
+from swarmgen.conformance.decisions import typed_section
 from swarmgen.conformance.irp import MAX_EVENTS, MAX_VIRTUAL_MS, Outcome, Test
 from swarmgen.conformance.qt import WAIT_SECONDS
 
@@ -92,6 +93,7 @@ def markdown(content: Mapping[str, Any]) -> str:
         *_features(rows),
         "",
         *_unexpressed(rows),
+        *typed_section(rows),
         *_semantics(rows),
         "## Results",
         "",

@@ -18,7 +18,7 @@ Modules of the package import one another directly, never through this file.
 
 from swarmgen.expr.errors import ExprError
 from swarmgen.expr.parse import parse_bindings, parse_expr
-from swarmgen.expr.render import js_string, to_ecmascript, to_python, to_text
+from swarmgen.expr.render import event_text, js_string, to_ecmascript, to_python, to_text
 from swarmgen.expr.statements import parse_actions
 from swarmgen.expr.tree import (
     EVENT_META,
@@ -102,6 +102,7 @@ __all__ = [
     "Value",
     "action_exprs",
     "event_fields",
+    "event_text",
     "flat",
     "free_names",
     "in_states",

@@ -250,6 +250,8 @@ class _Parser:
     def system(self, tok: Tok) -> _Node:
         """A system variable; `_event` only through one of its fields."""
         variable = System(name=tok.text)  # one of SYSTEM_VARIABLES
+        if tok.text == "_ioprocessors" and self.is_op(".", self.peek()):
+            return self.processor(variable)
         if tok.text != "_event":
             return variable, 1
         if not self.is_op(".", self.peek()):
@@ -261,6 +263,19 @@ class _Parser:
             self.fail(field, f"`_event` has the fields {known}")
         self.advance()
         return Attr(obj=variable, name=field.text), 2
+
+    def processor(self, variable: System) -> _Node:
+        """`_ioprocessors.scxml.location`: the SCXML event processor's address (this session's
+        `#_scxml_<sessionid>`, W3C 5.10; the only processor, so the only path)."""
+        for expected in ("scxml", "location"):
+            self.advance()  # the '.'
+            word = self.peek()
+            if word.kind != "word" or word.text != expected:
+                self.fail(word, "`_ioprocessors` is read as _ioprocessors.scxml.location")
+            self.advance()
+            if expected == "scxml" and not self.is_op(".", self.peek()):
+                self.fail(self.peek(), "`_ioprocessors` is read as _ioprocessors.scxml.location")
+        return Attr(obj=Attr(obj=variable, name="scxml"), name="location"), 3
 
     def list_of(self) -> _Node:
         """`[a, b, ...]`: a sequence literal."""

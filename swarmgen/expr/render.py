@@ -24,6 +24,8 @@ from swarmgen.expr.tree import (
     InState,
     ListOf,
     Name,
+    Raise,
+    Send,
     System,
     Unary,
     Value,
@@ -159,6 +161,13 @@ def _js_binary(b: Binary, name: Callable[[str], str]) -> str:
         return f"$sg.mod({left}, {right})"
     op = {"and": "&&", "or": "||"}.get(b.op, b.op)
     return f"({left} {op} {right})"
+
+
+def event_text(action: Raise | Send) -> str:
+    """The event of a `raise`/`send` as written: its name, or `(expr)` when computed."""
+    if isinstance(action, Raise) and action.named is not None:
+        return f"({to_text(action.named)})"
+    return str(action.event)
 
 
 def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:

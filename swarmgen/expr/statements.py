@@ -211,9 +211,12 @@ class _StatementParser(_Parser):
 
     def event_action(self) -> Raise | Send:
         verb = self.advance()
-        name = self.event_name(verb)
-        args = self.arguments() if self.is_op("(", self.peek()) else ()
+        named = self.computed_name() if verb.text == "raise" else None
+        name = self.event_name(verb) if named is None else None
+        content = self.content() if verb.text == "raise" else None
+        args = self.arguments() if self.is_op("(", self.peek()) and content is None else ()
         if verb.text != "raise":
+            assert name is not None  # only a raise computes its event's name
             after = self.peek()
             if self.is_word("after", after):
                 self.fail(
@@ -233,8 +236,38 @@ class _StatementParser(_Parser):
         if sendid is None:  # W3C: `id` or `idlocation`, not both
             into = self.name_after("into", "a member datum", "`raise e after 1 s into d`")
         return Raise(
-            event=name, args=args, delay=delay, sendid=sendid, target=target, via=via, into=into
+            event=name,
+            args=args,
+            delay=delay,
+            sendid=sendid,
+            target=target,
+            via=via,
+            into=into,
+            named=named,
+            content=content,
         )
+
+    def computed_name(self) -> Operand | None:
+        """`raise (expr)`: the event's name computed when it runs (W3C's `eventexpr`)."""
+        if not self.is_op("(", self.peek()):
+            return None
+        opening = self.advance()
+        value, _ = self.expr(0)
+        self.close(opening)
+        return value
+
+    def content(self) -> Operand | None:
+        """`raise e(expr)`: the event's whole data is the value (W3C's `<content>`); fields
+        are `raise e(f = expr, ...)`."""
+        if not self.is_op("(", self.peek()):
+            return None
+        named = self.peek(1).kind == "word" and self.is_op("=", self.peek(2))
+        if named or self.is_op(")", self.peek(1)):
+            return None  # fields (or none): `arguments`
+        opening = self.advance()
+        value, _ = self.expr(0)
+        self.close(opening)
+        return value
 
     def operand_after(self, word: str) -> Operand | None:
         """The expression after `word` (`to`, `via`), when `word` comes next."""

@@ -253,8 +253,14 @@ class Raise(_Model):
     `<send>` to the session's own external queue), cancellable by its send id."""
 
     kind: Literal["raise"] = "raise"
-    event: EventName
+    # None: `raise (expr)`, the name `named` computes (the parser gives one of the two; an
+    # event's fields, `args`, or its whole data, `content`, not both)
+    event: EventName | None = None
     args: Annotated[tuple[Arg, ...], AfterValidator(_unique_args)] = ()
+    # `raise (expr)`: W3C's <send eventexpr>, the event's name computed when the action runs
+    named: Operand | None = None
+    # `raise e(expr)`: the event's data is this value (W3C's <send> with <content>)
+    content: Operand | None = None
     delay: Delay | None = None
     sendid: Ident | None = None  # `as <name>`: what `cancel <name>` names
     # `to <expr>`: W3C's <send target>: this member's session (`"#_scxml_" + _sessionid`), or
@@ -483,11 +489,13 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
     target = rewrite(given) if given is not None else None
     given_via = action.via if isinstance(action, Raise) else None
     via = rewrite(given_via) if given_via is not None else None
+    recomputed = _computed(action, rewrite)
     if (
         all(v is a.value for v, a in zip(values, action.args, strict=True))
         and (delay is None or amount is delay.amount)
         and target is given
         and via is given_via
+        and recomputed is None
     ):
         return action
     args = tuple(Arg(name=a.name, value=v) for a, v in zip(action.args, values, strict=True))
@@ -495,6 +503,7 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
         return Send(event=action.event, args=args)
     if delay is not None and amount is not None:
         delay = Delay(amount=amount, unit=delay.unit)
+    named, content = recomputed if recomputed is not None else (action.named, action.content)
     return Raise(
         event=action.event,
         args=args,
@@ -503,7 +512,22 @@ def map_action(action: Action, rewrite: Callable[[Expr], Expr]) -> Action:
         target=target,
         via=via,
         into=action.into,
+        named=named,
+        content=content,
     )
+
+
+def _computed(
+    action: Raise | Send, rewrite: Callable[[Expr], Expr]
+) -> tuple[Expr | None, Expr | None] | None:
+    """A raise's computed name and content value rewritten, or None when neither changes."""
+    if not isinstance(action, Raise) or (action.named is None and action.content is None):
+        return None
+    named = rewrite(action.named) if action.named is not None else None
+    content = rewrite(action.content) if action.content is not None else None
+    if named is action.named and content is action.content:
+        return None
+    return named, content
 
 
 def action_exprs(action: Action) -> tuple[Expr, ...]:
@@ -528,6 +552,10 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
         found = (action.delay.amount, *found)
     if isinstance(action, Raise) and action.target is not None:
         found = (action.target, *found)
+    if isinstance(action, Raise) and action.content is not None:
+        found = (*found, action.content)
+    if isinstance(action, Raise) and action.named is not None:
+        found = (action.named, *found)
     if isinstance(action, Raise) and action.via is not None:
         found = (action.via, *found)
     return found

@@ -19,8 +19,9 @@ from swarmgen.frontend import scxml_cpswarm
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError
 from swarmgen.frontend.scxml_actions import Actions
-from swarmgen.frontend.scxml_expr import ExprUnsupported, literal
+from swarmgen.frontend.scxml_expr import ExprUnsupported, json_fields, literal
 from swarmgen.frontend.scxml_raw import PRIMITIVES, Builder, children, in_scxml, in_sg, local, sg
+from swarmgen.frontend.scxml_src import inline_src
 from swarmgen.frontend.scxml_states import States
 
 DATAMODELS = ("ecmascript", "null", "swarmgen")
@@ -231,15 +232,17 @@ class _Document:
 
     def datamodel(self, owner: RawElement) -> None:
         for data in self.data_nodes(report=True):
+            if data.get("src") is not None and not inline_src(self.b, data):
+                continue  # reported; else the file's text is its inline content now
             ident = str(data.get("id", ""))
             content = (data.text or "").strip()
-            if data.get("src") is not None or len(data) or (content and data.get("expr")):
+            if len(data) or (content and data.get("expr")):
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,
                     data,
                     "attribute",
-                    attribute="src",
-                    value=data.get("src") or "content",
+                    attribute="content",
+                    value="XML" if len(data) else content[:200],
                     element="data",
                     why="only expr gives a datum's value",
                 )
@@ -341,6 +344,7 @@ class _Document:
                     for p in node
                     if isinstance(p.tag, str) and local(p) == "param"
                 ] + str(node.get("namelist", "")).split()  # a namelist's data ids are fields
+                params += _content_fields(node)
             for name in names:
                 if (
                     name
@@ -470,3 +474,11 @@ _PLATFORM = {"done", "error", "outcome", "after"}
 _FIELD_READ = re.compile(
     r'_event\.data\.([A-Za-z_][A-Za-z0-9_]*)|\$sg\.field\(_event,\s*"([^"]+)"\)'
 )
+
+
+def _content_fields(send: etree._Element) -> list[str]:
+    """The fields a `<send>`'s inline JSON-object `<content>` gives (`json_fields`)."""
+    content = children(send, "content")
+    if not content or len(content[0]) or content[0].get("expr") is not None:
+        return []
+    return [name for name, _ in json_fields(content[0].text or "") or []]

@@ -17,6 +17,7 @@ from swarmgen.frontend.scxml_expr import (
     InState,
     Marker,
     conjuncts,
+    json_fields,
     literal,
     translate,
 )
@@ -111,21 +112,7 @@ class Actions:
         for block in children(node, "donedata"):
             contents = children(block, "content")
             if contents:  # the whole data: `done(expr)`
-                content = contents[0]
-                text = content.get("expr")
-                if text is None and not len(content):  # inline: JSON, else the text itself
-                    inline = (content.text or "").strip()
-                    try:
-                        constant = literal(inline)
-                    except ExprUnsupported:
-                        constant = inline
-                    if not isinstance(constant, bool | int | float | str) or constant is None:
-                        constant = inline
-                    text = expr.to_ecmascript(expr.Const(value=constant))
-                value = self.text(text, content) if text is not None else None
-                if value is None and len(content):
-                    why = "a <content> is an expression, not XML"
-                    self.b.report(dg.SCXML_UNSUPPORTED, content, element="content", why=why)
+                value = self.content(contents[0])
                 found += [f"done({value})"] if value is not None else []
                 continue
             fields = []
@@ -138,6 +125,28 @@ class Actions:
                     fields.append(f"{param.get('name')} = {value}")
             found.append(f"done({', '.join(fields)})")
         return found
+
+    def content(self, content: etree._Element) -> str | None:
+        """A `<content>`'s value as the language's expression: its `expr`, or its inline text
+        (JSON, else the text itself as a space-normalized string, W3C B.2.2); XML content is
+        reported (None); swarmgen's own `$sg.content(e)` is read back as `e`."""
+        text = content.get("expr")
+        own = _OWN_CONTENT.fullmatch(text) if text is not None else None
+        text = own.group(1) if own is not None else text
+        if text is None and not len(content):  # inline: JSON, else the text itself
+            inline = (content.text or "").strip()
+            try:
+                constant = literal(inline)
+            except ExprUnsupported:
+                constant = None
+            if not isinstance(constant, bool | int | float | str) or constant is None:
+                constant = " ".join(inline.split())
+            text = expr.to_ecmascript(expr.Const(value=constant))
+        value = self.text(text, content) if text is not None else None
+        if value is None and len(content):
+            why = "a <content> is an expression, not XML"
+            self.b.report(dg.SCXML_UNSUPPORTED, content, element="content", why=why)
+        return value
 
     def timer(self, node: etree._Element) -> bool:
         """`<send event="after.S.n" id=... delay="Nms"/>`: the emitted time-event pattern."""
@@ -393,7 +402,22 @@ class Actions:
             value = self.text(source, param)
             if value is not None:
                 fields.append(f"{param.get('name')} = {value}")
-        event = self.event_name(str(node.get("event", "")))
+        computed = node.get("eventexpr") if verb == "raise" else None
+        if computed is not None:  # W3C's eventexpr: `raise (expr)`
+            named = self.text(computed, node)
+            if named is None:
+                return []
+            event = f"({named})"
+        else:
+            event = self.event_name(str(node.get("event", "")))
+        contents = children(node, "content") if verb == "raise" else []
+        inline = (contents[0].text or "") if contents and not len(contents[0]) else ""
+        fielded = json_fields(inline) if contents and contents[0].get("expr") is None else None
+        if fielded is not None:  # a JSON object: the event's fields, `raise e(f = v, ...)`
+            return [f"{verb} {event}({', '.join(f'{n} = {v}' for n, v in fielded)})"]
+        if contents:  # the event's whole data: `raise e(expr)`
+            value = self.content(contents[0])
+            return [f"{verb} {event}({value})"] if value is not None else []
         return [f"{verb} {event}({', '.join(fields)})" if fields else f"{verb} {event}"]
 
     def effect(
@@ -481,8 +505,8 @@ class Actions:
 _LITERAL_DELAY = re.compile(r"\s*(\d+(?:\.\d*)?|\.\d+)(ms|s)\s*", re.ASCII)
 # what swarmgen's emitter writes for a computed delay (docs/scxml.md)
 _OWN_DELAY = re.compile(r"\$sg\.(?:delay\((.*), (1|1000)\)|duration\((.*)\))", re.DOTALL)
+_OWN_CONTENT = re.compile(r"\$sg\.content\((.*)\)", re.DOTALL)  # the emitter's (docs/scxml.md)
 _PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
-_UNREAD_SEND = ("eventexpr",)
 _HTTP = "http://www.w3.org/TR/scxml/#BasicHTTPEventProcessor"
 
 
@@ -491,8 +515,10 @@ def _unread_send(node: etree._Element) -> str | None:
     sendid = node.get("id")
     if node.get("type") in (_HTTP, "basichttp"):
         return "swarmgen has no Basic HTTP event I/O processor"
-    if any(node.get(a) is not None for a in _UNREAD_SEND) or children(node, "content"):
-        return "eventexpr and <content> are not in the IR yet"
+    if node.get("event") is not None and node.get("eventexpr") is not None:
+        return "event and eventexpr exclude each other"
+    if children(node, "content") and (node.get("namelist") or children(node, "param")):
+        return "a <content> excludes namelist and <param> (W3C 6.2)"
     location = node.get("idlocation")
     if location is not None and (not location.isidentifier() or location.startswith("_")):
         return "an idlocation is a data id"

@@ -32,6 +32,7 @@ _LEVELS: tuple[dict[str, str], ...] = (  # lowest precedence first: JS operator 
     {"*": "*", "/": "/", "%": "%"},
 )
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_PROCESSOR = "http://www.w3.org/TR/scxml/#SCXMLEventProcessor"
 _MARKERS = {"$sg.tick": "tick", "$sg.spin": "spin"}
 
 
@@ -115,6 +116,29 @@ def literal(text: str) -> object:
         if isinstance(value, int | float) and not isinstance(value, bool):
             return -value if found.op == "-" else value
     raise ExprUnsupported("not a literal value")
+
+
+def json_fields(text: str) -> list[tuple[str, str]] | None:
+    """(name, value as the language's text) of each member of a JSON object whose names are identifiers and whose
+    values are scalars (an event's data sent as `<content>{"f": 1}</content>`: its fields), or
+    None when the text is no such object."""
+    try:
+        found = json.loads(text)
+    except ValueError:
+        return None
+    if not isinstance(found, dict) or not found:
+        return None
+    fields = []
+    for name, value in found.items():
+        if not _IDENT.fullmatch(name) or name.startswith("__"):
+            return None
+        if value is None or not isinstance(value, bool | int | float | str):
+            return None
+        try:
+            fields.append((name, expr.to_text(expr.Const(value=value))))
+        except ValueError:  # a value the language cannot hold exactly
+            return None
+    return fields
 
 
 class _Parser:
@@ -289,6 +313,8 @@ class _Parser:
             field = _string(field)
         else:
             raise ExprUnsupported("_event.data is only read field by field")
+        if obj == expr.System(name="_ioprocessors") and field in (_PROCESSOR, "scxml"):
+            field = "scxml"  # the SCXML event processor, by its URI or its short name
         if not _IDENT.fullmatch(field):
             raise ExprUnsupported(f"member name {field!r} is not an identifier")
         if first:

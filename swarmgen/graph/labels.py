@@ -33,7 +33,9 @@ def action_text(action: expr.Action) -> str:
         case expr.Raise() | expr.Send():
             verb = "raise" if isinstance(action, expr.Raise) else "send"
             args = f"({_args_text(action.args)})" if action.args else ""
-            return f"{verb} {action.event}{args}{_delay_text(action)}"
+            if isinstance(action, expr.Raise) and action.content is not None:
+                args = f"({expr.to_text(action.content)})"  # the event's whole data
+            return f"{verb} {expr.event_text(action)}{args}{_delay_text(action)}"
         case expr.Cancel() if action.expr is not None:
             return f"cancel ({expr.to_text(action.expr)})"
         case expr.Cancel():

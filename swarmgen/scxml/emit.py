@@ -20,6 +20,7 @@ from swarmgen.ir.nodes import Model, Value
 from swarmgen.names import identifier
 from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX
 from swarmgen.scxml.support import (
+    CONTENT_SCRIPT,
     DELAY_SCRIPT,
     META_SCRIPT,
     SPIN,
@@ -73,6 +74,7 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
         + (STEP_SCRIPT if bounded else "")
         + (DELAY_SCRIPT if delays else "")
         + (META_SCRIPT if meta else "")
+        + (CONTENT_SCRIPT if _sends_content(chart) else "")
     )
     for node in chart.children:
         writer.node(scxml, node)
@@ -177,8 +179,9 @@ class _Writer:
         self.onexit(element, node)
         if node.donedata:  # a final state's: the fields of its done.state event
             self.params(_sub(element, "donedata"), node.donedata, "param")
-        elif node.donecontent is not None:  # or its whole data
-            _sub(_sub(element, "donedata"), "content", {"expr": self.js(node.donecontent)})
+        elif node.donecontent is not None:  # or its whole data (as `raise e(value)`'s)
+            value = f"$sg.content({self.js(node.donecontent)})"  # CONTENT_SCRIPT
+            _sub(_sub(element, "donedata"), "content", {"expr": value})
         if node.call is not None:
             self.finalize(element, node.id, node.call)
         for transition in node.transitions:
@@ -283,8 +286,14 @@ class _Writer:
                 or action.target is not None
                 or action.via is not None
                 or action.into is not None
+                or action.named is not None
+                or action.content is not None
             ):
-                self.params(self.delayed(parent, action, action.delay), action.params, "param")
+                send = self.delayed(parent, action, action.delay)
+                self.params(send, action.params, "param")
+                if action.content is not None:  # the event's whole data (W3C 6.2.4)
+                    value = f"$sg.content({self.js(action.content)})"  # CONTENT_SCRIPT
+                    _sub(send, "content", {"expr": value})
             elif isinstance(action, c.Raise) and not action.params:
                 _sub(parent, "raise", {"event": action.event})
             elif isinstance(action, c.Raise):
@@ -333,14 +342,18 @@ class _Writer:
         self, parent: etree._Element, action: c.Raise, delay: c.Delay | None
     ) -> etree._Element:
         """`raise e [to t] after ...`: a `<send>` (without target: the session's external
-        queue) with a literal `delay` when the delay is a constant, else a `delayexpr`."""
-        attrs = {"event": action.event}
+        queue) with a literal `delay` when the delay is a constant, else a `delayexpr`; a
+        computed name is its `eventexpr`."""
+        if action.named is not None:
+            attrs = {"eventexpr": self.js(action.named)}
+        else:
+            attrs = {"event": action.event}
         target = action.target
         if isinstance(target, expr.Const) and isinstance(target.value, str):
             attrs["target"] = target.value
         elif target is not None:
             attrs["targetexpr"] = self.js(target)
-        elif delay is None:  # `via`/`into` alone: as `raise e(...)` (docs/semantics.md)
+        elif delay is None:  # `via`/`into`/a computed name or value alone: as `raise e(...)`
             attrs["target"] = "#_internal"
         via = action.via
         if isinstance(via, expr.Const) and isinstance(via.value, str):
@@ -429,6 +442,16 @@ def _literal_ms(delay: c.Delay) -> int | None:
     return int(ms) if ms >= 0 and ms == int(ms) else None
 
 
+def _sends_content(chart: c.Chart) -> bool:
+    """Whether some `raise e(value)` or `done(value)` sends a value as its event's data
+    (`CONTENT_SCRIPT`)."""
+    return any(n.donecontent is not None for n in chart.walk()) or any(
+        isinstance(a, c.Raise) and a.content is not None
+        for n in chart.walk()
+        for a in c.flat(_actions_of(n))
+    )
+
+
 def _computed_delay(action: c.Action) -> bool:
     """Whether the action is a delayed raise whose delay the support script computes."""
     return (
@@ -463,7 +486,8 @@ def _expressions_of(node: c.Node) -> list[expr.Expr]:
         elif isinstance(action, c.Raise | c.Send):
             found += [p.value for p in action.params if not isinstance(p.value, c.FieldDefault)]
             if isinstance(action, c.Raise):
-                found += [e for e in (action.target, action.via) if e is not None]
+                computed = (action.target, action.via, action.named, action.content)
+                found += [e for e in computed if e is not None]
     if node.call is not None:
         found += [a.value for a in node.call.args]
     return found

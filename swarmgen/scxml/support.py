@@ -109,5 +109,21 @@ $sg.meta = function (e, f) {
   return (v === undefined || v === null) ? "" : v;
 };
 """
+# `raise e(value)` (only in a document that has one): Qt SCXML gives a `<content expr>` as its
+# text (the number 123 arrives as "123", a list as ""), where W3C's ECMAScript datamodel and the
+# engine give the value itself. So the document sends the value as JSON behind a marker no
+# model string starts with (a NUL), and `$sg.meta(_event, "data")` reads it back as the value.
+CONTENT_SCRIPT = r"""
+$sg.boxed = "\u0000sg.content:";
+$sg.content = function (v) { return $sg.boxed + JSON.stringify(v); };
+if ($sg.meta !== undefined) {
+  $sg.unboxed = $sg.meta;
+  $sg.meta = function (e, f) {
+    var v = $sg.unboxed(e, f);
+    return (f === "data" && typeof v === "string" && v.indexOf($sg.boxed) === 0) ?
+      JSON.parse(v.substring($sg.boxed.length)) : v;
+  };
+}
+"""
 TICK = "$sg.tick(_event)"
 SPIN = "$sg.spin()"

@@ -282,6 +282,14 @@ class Context:
         """`raise e to target [after ...]`: W3C's `<send target>` (Engine.raise_targeted)."""
         self._engine.raise_targeted(name, data, target, delay_ms, sendid)
 
+    def event_name(self, value: Any) -> str:
+        """The name `raise (expr)` computed (W3C's `<send eventexpr>`): a string, as Qt SCXML
+        takes it (one that is no W3C event name meets only `*`); anything else is an error
+        (error.execution), nothing is raised."""
+        if not isinstance(value, str) or not value:
+            raise ValueError(f"{value!r} is not an event name")
+        return value
+
     def raise_via(
         self,
         name: str,

@@ -1,0 +1,65 @@
+"""docs/conformance.md's decisions on the mandatory tests swarmgen's typed datamodel does not run,
+per test, and on how confSwarmgen.xsl writes the IRP's vocabulary for that datamodel."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+# W3C wants error.execution when the action runs; swarmgen checks the same thing when it compiles
+_COMPILED = (
+    "the typed datamodel refuses, when the document is compiled, what W3C raises "
+    "error.execution for when it runs"
+)
+_NO_READ_ERROR = (
+    "an `<assign>`'s invalid location is written as the read-only `_name`, but reading `_name` "
+    "succeeds: no location of the typed datamodel fails to read when it runs"
+)
+_SCRIPT = (
+    '`<script>`: the test is "valid only for datamodels that support scripting" (its own '
+    "comment); swarmgen's datamodel is typed data and an expression language, with no scripts: "
+    "ECMAScript source would run only in the SCXML output, nothing runs it in Python"
+)
+TYPED = {
+    "152": f"{_COMPILED}: `<foreach>` over a number (the IRP's illegalArray, 7) is SG208, an item "
+    "that names no datum ('continue') SG060",
+    "156": f"{_COMPILED}: the loop's body assigns Var5, which no `<data>` declares (SG112; in "
+    "ECMAScript `1 / 0` is Infinity, so the undeclared location is the test's error); the IRP "
+    "writes it as an ordinary location, not the invalid one confSwarmgen.xsl maps to `_name`",
+    "298": f"{_COMPILED}: a `<donedata>` `<param>` reads the invalid location `foo.bar.baz` "
+    f"(SG112); {_NO_READ_ERROR}",
+    "553": f'{_COMPILED}: a `namelist` that names no datum (`"foo`, SG060); {_NO_READ_ERROR}',
+    "525": "the loop's body extends the array it iterates (`[].concat(Var1, [4])`); swarmgen's "
+    '`for` iterates a copy as W3C wants (docs/semantics.md, "Loops"), but the language has no '
+    "calls and no sequence concatenation: `+` on sequences cannot be written in ECMAScript "
+    'without their types (`[1] + [4]` is the string "14")',
+    "329": "it assigns `_event` and `_ioprocessors` whole to data and compares them "
+    "(`Var2 == _event`): the typed datamodel reads `_event` field by field and `_ioprocessors` "
+    "as `_ioprocessors.scxml.location`, and records do not compare (ECMAScript compares objects "
+    "by identity, Python by value: SG208); its read-only `_sessionid` and `_name` swarmgen does "
+    "(tests/test_system_assign.py)",
+    "330": "`'name' in _event`: every event of the typed datamodel has all of W3C's fields "
+    '(blank ones ""), so there is nothing to test, and the language has no `in`',
+    "302": _SCRIPT,
+    "303": _SCRIPT,
+    "304": _SCRIPT,
+}
+CONVERSIONS = [
+    "`invalidSessionID` is the string `'27'` (confEcma.xsl's number 27 would make the datum a "
+    "number, which test 173 then assigns a target string: SG208); `invalidSendTypeExpr` the "
+    "same way",
+    "`systemVarIsBound` (test 319, of `_event`) is `_event.name != ''`: reading `_event` fails "
+    "(error.execution, the cond is false) until the first event, and every event has a name "
+    "(W3C 5.10.1)",
+    "`<data src>` reads the IRP's `.txt` files, copied beside the converted documents "
+    "(docs/scxml-input.md: a file in the document's directory, read when it is compiled)",
+]
+
+
+def typed_section(rows: Mapping[str, Mapping[str, Any]]) -> list[str]:
+    """The mandatory tests the typed datamodel does not run and why, and the conversions."""
+    found = [t for t in TYPED if rows.get(t, {}).get("swarmgen") == "not-run"]
+    lines = ["## Tests the typed datamodel does not express", ""]
+    lines += [f"- {t}: {TYPED[t]}." for t in found]
+    lines += ["", "confSwarmgen.xsl writes for the typed datamodel:", ""]
+    return [*lines, *(f"- {c}." for c in CONVERSIONS), ""]
