@@ -23,6 +23,7 @@ from swarmgen.chart.model import Chart
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend import RawModel, load
 from swarmgen.generated import header, markdown_cell
+from swarmgen.ir import query
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
 from swarmgen.ros.idl_index import InterfaceIndex, default_roots
@@ -105,10 +106,15 @@ def _validate_loaded(
         return Validation(model, dg.normalise(found))
     index = interface_index(path, interfaces)
     found += check.run(model, index)
+    children = query.sessions(model)  # invoked documents: checked as models of their own
+    for child in children:
+        found += check.run(child, index)
     if not check.may_lower(found):
         return Validation(model, dg.normalise(found), interfaces=index)
     charts = lower(model)
     found += chart_checks.run(model, charts)
+    for child in children:
+        found += chart_checks.run(child, lower(child))
     return Validation(model, dg.normalise(found), charts, index)
 
 

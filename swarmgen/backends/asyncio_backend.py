@@ -21,6 +21,7 @@ RUNTIME_MODULES = (
     "microstep",
     "configuration",
     "engine",
+    "sessions",
     "member",
     "simulated",
     "args",

@@ -55,6 +55,7 @@ RETURNS = {
     "args": "dict[str, Any]",
     "goal": "dict[str, Any]",
     "donedata": "Any",
+    "value": "Any",
 }
 
 
@@ -99,6 +100,7 @@ class ChartCode:
     # each in black's layout (`pylayout`) for `build()`: further lines carry their indentation
     statements: list[str] = field(default_factory=list)
     data_literal: str = "{}"
+    sessions: int = 0  # invoked sessions' builders (`s1`, ...): the module imports `Invoke`
 
 
 def py_literal(value: Any) -> str:
@@ -158,6 +160,7 @@ class ChartRenderer:
         # whether code rendered since the last helper function reads or writes `d`: every
         # expression is rendered right before the function that holds it
         self._reads_data = False
+        self.builder = "b"  # the ChartBuilder the statements call (`s<n>`: an invoked chart)
 
     def render(self) -> ChartCode:
         """The chart's helper functions and `ChartBuilder` statements, in document order."""
@@ -170,6 +173,51 @@ class ChartRenderer:
             self._node(node, None)
         self.code.statements.append(f"b.initial(None, {tuple(self.chart.initial)!r})")
         return self.code
+
+    def _session(self, chart: c.Chart) -> str:
+        """An invoked chart's builder statements, before the state that invokes it: its own
+        `ChartBuilder` (`s<n>`), helper functions numbered on with this chart's."""
+        self.code.sessions += 1
+        child = ChartRenderer(chart)
+        child.code, child._counter, child.builder = (
+            self.code,
+            self._counter,
+            f"s{self.code.sessions}",
+        )
+        items = ", ".join(f"{d.id!r}: {py_literal(d.initial)}" for d in chart.data)
+        events = event_fields_literal(chart)
+        self.code.statements.append(
+            f"{child.builder} = ChartBuilder({chart.name!r}, data={{{items}}}, events={events})"
+        )
+        zeros = zeros_literal(chart)
+        if zeros is not None:
+            self.code.statements.append(f"{child.builder}.zeros({zeros})")
+        for node in chart.children:
+            child._node(node, None)
+        self.code.statements.append(f"{child.builder}.initial(None, {tuple(chart.initial)!r})")
+        self._counter = child._counter
+        return child.builder
+
+    def _invoke(self, invoke: c.Invoke) -> pylayout.Call:
+        """`Invoke(<chart>, ...)` of a state's `invokes=` option, its chart rendered first."""
+        builder = self._session(invoke.chart)
+        parts: list[pylayout.Arg] = [f"{builder}.build()"]
+        if invoke.invokeid is not None:
+            parts.append(f"invokeid={invoke.invokeid!r}")
+        if invoke.idlocation is not None:
+            parts.append(f"idlocation={invoke.idlocation!r}")
+        if invoke.kind_expr is not None:
+            kind = self._function("value", [f"return {_unwrap(self.py(invoke.kind_expr))}"])
+            parts.append(f"type={kind}")
+        if invoke.params:
+            items = ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in invoke.params)
+            parts.append(f"args={self._function('args', [f'return {{{items}}}'])}")
+        finalize = self._action(invoke.finalize)
+        if finalize is not None:
+            parts.append(f"finalize={finalize}")
+        if invoke.autoforward:
+            parts.append("autoforward=True")
+        return pylayout.Call("Invoke", tuple(parts))
 
     # --- expressions
 
@@ -335,11 +383,18 @@ class ChartRenderer:
             options.append(pylayout.Kw("call=", pylayout.Call("Call", tuple(parts))))
         if node.timers:
             options.append(f"timers={tuple((t.event, t.delay_ms) for t in node.timers)!r}")
-        self._statement("b.node", repr(node.id), repr(node.kind), repr(parent), *options)
+        if node.invokes:
+            invokes = ", ".join(pylayout.flat(self._invoke(i)) for i in node.invokes)
+            options.append(f"invokes=({invokes},)")  # an atom: formatted by `format_python`
+        self._statement(
+            f"{self.builder}.node", repr(node.id), repr(node.kind), repr(parent), *options
+        )
         if node.initial is not None:
             action = self._action(node.initial.actions)
             extra = [f"action={action}"] if action else []
-            self._statement("b.initial", repr(node.id), repr(tuple(node.initial.targets)), *extra)
+            self._statement(
+                f"{self.builder}.initial", repr(node.id), repr(tuple(node.initial.targets)), *extra
+            )
         for child in node.children:
             self._node(child, node.id)
         for transition in node.transitions:
@@ -348,7 +403,7 @@ class ChartRenderer:
     def _transition(self, source: str, transition: c.Transition) -> None:
         options = self._transition_options(transition, "cond")
         events, targets = repr(tuple(transition.events)), repr(tuple(transition.targets))
-        self._statement("b.transition", repr(source), events, targets, *options)
+        self._statement(f"{self.builder}.transition", repr(source), events, targets, *options)
 
 
 @functools.lru_cache(maxsize=8192)

@@ -34,6 +34,7 @@ from .chart import (
 from .configuration import Configuration, Plan, Selection, Tables
 from .host import Event, Host, NullHost
 from .microstep import document_order, in_final
+from .sessions import Sessions
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
 
@@ -77,6 +78,15 @@ class Engine:
         self._bound_hit = False
         self._input: Event | None = None
         self._bounded = any(t.bounded for n in self.chart.nodes.values() for t in n.transitions)
+        # Invoked sessions (`sessions`): this engine's children, and where it sits when it is
+        # one itself (the invoke ids from the member's session, its number and its parent's).
+        invokes = any(n.invokes for n in self.chart.nodes.values())
+        self.sessions: Sessions | None = Sessions(self) if invokes else None
+        self.path: tuple[str, ...] = ()
+        self.root_host: Host = self.host
+        self.serial = 0
+        self.invokeid: str | None = None
+        self.parent_sessions: Sessions | None = None
 
     # --- public
 
@@ -94,6 +104,10 @@ class Engine:
         """Process one external event completely (one macrostep)."""
         if not self.running:
             return
+        if event.to is not None and event.to != self.path:  # for an invoked session
+            if self.sessions is not None and len(event.to) > len(self.path):
+                self.sessions.route(event, event.to)
+            return
         if event.origin is not None and not self._current_activation(event.origin):
             return  # the outcome of a behaviour that was cancelled: discarded
         name = event.name
@@ -102,6 +116,8 @@ class Engine:
             fill = self._fillers.get(name) or self._tables.filler(name, template)
             event.data = fill(event.data)
         self.ctx.event = event
+        if self.sessions is not None and not self.sessions.received(event):
+            return  # from a session that was cancelled: discarded
         cfg = self._cfg or self._configuration()
         selection = cfg.selections.get(name) or cfg.selection(name)
         if selection.chains:
@@ -169,14 +185,7 @@ class Engine:
         negative, is an error (error.execution): the event is not raised."""
         if isinstance(delay_ms, bool) or not isinstance(delay_ms, int | float) or delay_ms < 0:
             raise ValueError(f"the delay of {name!r} is {delay_ms!r}, not a duration")
-        if sendid is None:  # a key no `as <name>` can give (a name has no dot)
-            self._sends += 1
-            key = f"send.{self._sends}"
-        else:
-            key = sendid
-        event = self.make_event(name, data, self.member_id)
-        event.sendid = sendid or ""
-        self.host.start_delayed(key, event, delay_ms)
+        self.raise_delayed_event(self.make_event(name, data, self.member_id), delay_ms, sendid)
 
     def system_variable(self, name: str, event: Event | None) -> Any:
         """`_event` (its W3C fields, docs/semantics.md), `_sessionid`, `_name`, `_ioprocessors`."""
@@ -219,6 +228,8 @@ class Engine:
         no target: error.execution, the block ends."""
         if target == "#_internal" and not delay_ms:
             self.raise_internal(name, data)
+        elif self._to_session(name, data, target, delay_ms, sendid):
+            pass
         elif target == f"#_scxml_{self.session_id}":
             self.raise_delayed(name, data, delay_ms, sendid)
         elif isinstance(target, str) and target.startswith("#_scxml_"):
@@ -259,9 +270,63 @@ class Engine:
         """`cancel id`: the host drops the pending delayed events raised as `id`."""
         self.host.cancel_delayed(sendid)
 
+    def _to_session(
+        self, name: str, data: Mapping[str, Any] | None, target: Any, delay: Any, sendid: str | None
+    ) -> bool:
+        """`#_parent` from an invoked session, `#_<invokeid>` to one of its children: the
+        event, sent now or after the delay (docs/semantics.md, "Invoked sessions"). False:
+        the target names no such session."""
+        up = target == "#_parent" and self.parent_sessions is not None
+        child = None
+        if not up and isinstance(target, str) and target.startswith("#_") and self.sessions:
+            child = self.sessions.active.get(target[2:])
+        if not up and (child is None or not child.engine.running):
+            return False
+        event = self.make_event(name, data, self.member_id)
+        if not delay:
+            if up and self.parent_sessions is not None:
+                self.parent_sessions.to_parent(event, self)
+            elif child is not None:
+                child.host.deliver(event)
+            return True
+        if up and self.parent_sessions is not None:
+            event.invokeid, event.session = self.invokeid, self.serial
+            event.to = self.parent_sessions.engine.path
+        elif child is not None:
+            event.to = child.engine.path
+        self.raise_delayed_event(event, delay, sendid)
+        return True
+
+    def raise_delayed_event(self, event: Event, delay_ms: Any, sendid: str | None) -> None:
+        """A delayed event made by the caller (one for another session): as `raise_delayed`."""
+        if isinstance(delay_ms, bool) or not isinstance(delay_ms, int | float) or delay_ms < 0:
+            raise ValueError(f"the delay of {event.name!r} is {delay_ms!r}, not a duration")
+        if sendid is None:  # a key no `as <name>` can give (a name has no dot)
+            self._sends += 1
+            key = f"send.{self._sends}"
+        else:
+            key = sendid
+        event.sendid = sendid or ""
+        self.host.start_delayed(key, event, delay_ms)
+
+    def run_finalize(self, action: Callable[[Context], None], node: Node) -> None:
+        """An invoke's `<finalize>`, on the event from its session being processed."""
+        self._run(action, "finalize in", node)
+
     # --- the algorithm
 
     def _macrostep(self) -> None:
+        """Microsteps until nothing is enabled, then the behaviours and invokes of the states
+        entered start; an error that raised starts another round (W3C mainEventLoop)."""
+        while True:
+            self._settle()
+            if not self._to_invoke:
+                return
+            self._start_calls()
+            if not self.internal or not self.running:
+                return
+
+    def _settle(self) -> None:
         internal = self.internal
         while self.running:
             cfg = self._cfg or self._configuration()
@@ -278,8 +343,6 @@ class Engine:
                 enabled = self._choose(selection)
             if enabled:
                 self._microstep(enabled)
-        if self._to_invoke:
-            self._start_calls()
 
     def _start_calls(self) -> None:
         invoke = self._to_invoke
@@ -296,6 +359,8 @@ class Engine:
                 except Exception as err:
                     args = self._unusable_arguments(node, err)
                 host.start_call(node, call, args if isinstance(args, dict) else {}, activation)
+            if node.invokes and node in config and self.sessions is not None:
+                self.sessions.start(node)
         invoke.clear()
 
     def _unusable_arguments(self, node: Node, err: Exception) -> dict[str, Any]:
@@ -380,7 +445,7 @@ class Engine:
                 config.difference_update(exits)
             else:
                 for state in exits:
-                    if state.call is not None or state.timers or state.onexit is not None:
+                    if state.call or state.timers or state.onexit or state.invokes:
                         self._leave(state)
                     config.discard(state)
         for transition in plan.transitions:
@@ -398,6 +463,8 @@ class Engine:
             self.host.cancel_timer(state, event)
         if state.onexit is not None:
             self._run(state.onexit, "exit of", state)
+        if state.invokes and self.sessions is not None:  # W3C: after the exit actions
+            self.sessions.cancel(state)
 
     def _enter(self, plan: Plan) -> None:
         """Enter the plan's entry set in document order; the configuration is then its target."""
@@ -409,7 +476,7 @@ class Engine:
             return
         for state, initial, default in plan.entries:
             config.add(state)
-            if state.call is not None:  # only these start a behaviour (`_start_calls`)
+            if state.call is not None or state.invokes:  # started by `_start_calls`
                 self._to_invoke.add(state)
             if state.onentry is not None:
                 self._run(state.onentry, "entry of", state)
@@ -426,9 +493,13 @@ class Engine:
     def _reached_final(self, state: Node) -> None:
         parent = state.parent
         if parent is None or parent.kind == "scxml":
+            done = self.parent_sessions  # an invoked session's done data is its parent's
+            data = self._done_data(state) if done and state.donedata is not None else None
             self.running = False
             self.finished = True
             self._exit_everything()
+            if done is not None:
+                done.done(self, data)
             return
         data = self._done_data(state) if state.donedata is not None else None
         self.internal.append(self.make_event(f"done.state.{parent.id}", data, kind="platform"))
@@ -500,13 +571,21 @@ def event_fields(event: Event) -> Record:
     timer = name.startswith("after.")
     sendid = name if timer else (event.sendid or "")
     sent = timer or event.sendid is not None or event.kind == "raised"
+    invokeid = event.invokeid or ""
+    # an event its parent session sent to an invoked session: addressed to it, sent by no one
+    # in it (its own sends carry a send id, its raises are "raised")
+    parent = event.to is not None and not invokeid and not sent
     data: Any = event.data  # a Record, or any value a final state's done(expr) gave
     return Record(
         name=name,
         type=_TYPES.get(event.kind, "external"),
         sendid=sendid,
-        origin="#_internal" if sent else "",
-        origintype=PROCESSOR if sent else "",
-        invokeid="",
+        origin=f"#_{invokeid}" if invokeid else "#_parent" if parent else _origin(sent),
+        origintype=PROCESSOR if sent or invokeid or parent else "",
+        invokeid=invokeid,
         data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
     )
+
+
+def _origin(sent: bool) -> str:
+    return "#_internal" if sent else ""

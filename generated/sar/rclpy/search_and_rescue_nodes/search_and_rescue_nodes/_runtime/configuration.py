@@ -169,7 +169,7 @@ def make_plan(config: frozenset[Node], enabled: Sequence[Transition], history: H
 def leaves_quietly(exits: Iterable[Node]) -> bool:
     """Whether leaving these states runs nothing: no behaviour, timer or exit action."""
     for state in exits:
-        if state.call is not None or state.timers or state.onexit is not None:
+        if state.call is not None or state.timers or state.onexit is not None or state.invokes:
             return False
     return True
 
@@ -180,6 +180,7 @@ def entered_quietly(entries: Iterable[Entry]) -> tuple[Node, ...] | None:
     for state, initial, default in entries:
         if (
             state.call is not None
+            or state.invokes
             or state.onentry is not None
             or state.timers
             or state.kind == "final"

@@ -26,6 +26,12 @@ class Event:
     # `raise e(f = ...)` (the step bound goes on counting through it)
     kind: str = "external"
     sendid: str | None = None  # a delayed raise's send id ("" without `as`): `_event.sendid`
+    # Invoked sessions (docs/semantics.md): the invoke id of the child session that sent it
+    # (`_event.invokeid`) and that session's number, and the path of invoke ids from the
+    # member's own session to the session it is for (None: the member's own session).
+    invokeid: str | None = None
+    session: int = 0
+    to: tuple[str, ...] | None = None
 
 
 class Host(Protocol):
