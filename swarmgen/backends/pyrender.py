@@ -56,6 +56,7 @@ RETURNS = {
     "goal": "dict[str, Any]",
     "donedata": "Any",
     "value": "Any",
+    "session": "Chart",
 }
 
 
@@ -100,7 +101,7 @@ class ChartCode:
     # each in black's layout (`pylayout`) for `build()`: further lines carry their indentation
     statements: list[str] = field(default_factory=list)
     data_literal: str = "{}"
-    sessions: int = 0  # invoked sessions' builders (`s1`, ...): the module imports `Invoke`
+    sessions: int = 0  # invoked sessions' builders (`_session_<n>`): the module imports `Invoke`
 
 
 def py_literal(value: Any) -> str:
@@ -160,7 +161,6 @@ class ChartRenderer:
         # whether code rendered since the last helper function reads or writes `d`: every
         # expression is rendered right before the function that holds it
         self._reads_data = False
-        self.builder = "b"  # the ChartBuilder the statements call (`s<n>`: an invoked chart)
 
     def render(self) -> ChartCode:
         """The chart's helper functions and `ChartBuilder` statements, in document order."""
@@ -175,33 +175,26 @@ class ChartRenderer:
         return self.code
 
     def _session(self, chart: c.Chart) -> str:
-        """An invoked chart's builder statements, before the state that invokes it: its own
-        `ChartBuilder` (`s<n>`), helper functions numbered on with this chart's."""
-        self.code.sessions += 1
+        """An invoked chart's builder: a helper function `_session_<n>(ctx) -> Chart` of its
+        own `ChartBuilder` statements (the engine calls it once), its helper functions
+        numbered on with this chart's."""
         child = ChartRenderer(chart)
-        child.code, child._counter, child.builder = (
-            self.code,
-            self._counter,
-            f"s{self.code.sessions}",
-        )
-        items = ", ".join(f"{d.id!r}: {py_literal(d.initial)}" for d in chart.data)
-        events = event_fields_literal(chart)
-        self.code.statements.append(
-            f"{child.builder} = ChartBuilder({chart.name!r}, data={{{items}}}, events={events})"
-        )
-        zeros = zeros_literal(chart)
-        if zeros is not None:
-            self.code.statements.append(f"{child.builder}.zeros({zeros})")
-        for node in chart.children:
-            child._node(node, None)
-        self.code.statements.append(f"{child.builder}.initial(None, {tuple(chart.initial)!r})")
+        child.code = ChartCode(functions=self.code.functions)
+        child._counter = self._counter
+        child.render()
         self._counter = child._counter
-        return child.builder
+        self.code.sessions += 1 + child.code.sessions
+        head = f"b = ChartBuilder({chart.name!r}, data={child.code.data_literal}, "
+        body = [head + f"events={event_fields_literal(chart)})", *child.code.statements]
+        reads = self._reads_data
+        self._reads_data = False
+        name = self._function("session", [*body, "return b.build()"])
+        self._reads_data = reads
+        return name
 
     def _invoke(self, invoke: c.Invoke) -> pylayout.Call:
         """`Invoke(<chart>, ...)` of a state's `invokes=` option, its chart rendered first."""
-        builder = self._session(invoke.chart)
-        parts: list[pylayout.Arg] = [f"{builder}.build()"]
+        parts: list[pylayout.Arg] = [self._session(invoke.chart)]
         if invoke.invokeid is not None:
             parts.append(f"invokeid={invoke.invokeid!r}")
         if invoke.idlocation is not None:
@@ -386,15 +379,11 @@ class ChartRenderer:
         if node.invokes:
             invokes = ", ".join(pylayout.flat(self._invoke(i)) for i in node.invokes)
             options.append(f"invokes=({invokes},)")  # an atom: formatted by `format_python`
-        self._statement(
-            f"{self.builder}.node", repr(node.id), repr(node.kind), repr(parent), *options
-        )
+        self._statement("b.node", repr(node.id), repr(node.kind), repr(parent), *options)
         if node.initial is not None:
             action = self._action(node.initial.actions)
             extra = [f"action={action}"] if action else []
-            self._statement(
-                f"{self.builder}.initial", repr(node.id), repr(tuple(node.initial.targets)), *extra
-            )
+            self._statement("b.initial", repr(node.id), repr(tuple(node.initial.targets)), *extra)
         for child in node.children:
             self._node(child, node.id)
         for transition in node.transitions:
@@ -403,7 +392,7 @@ class ChartRenderer:
     def _transition(self, source: str, transition: c.Transition) -> None:
         options = self._transition_options(transition, "cond")
         events, targets = repr(tuple(transition.events)), repr(tuple(transition.targets))
-        self._statement(f"{self.builder}.transition", repr(source), events, targets, *options)
+        self._statement("b.transition", repr(source), events, targets, *options)
 
 
 @functools.lru_cache(maxsize=8192)

@@ -165,6 +165,10 @@ SCXML_INVOKE = register(
             "invoked documents nest deeper than {limit} (a document that invokes itself?)",
             "invoke fewer levels of documents",
         ),
+        "many": M(
+            "a document and the documents it invokes invoke more than {limit} documents",
+            "invoke fewer documents",
+        ),
         "attribute": M(
             "{attribute} on <invoke> is not read: {why}",
             "docs/scxml-input.md, Invoke, lists what the reader accepts",

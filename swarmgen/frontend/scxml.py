@@ -51,9 +51,17 @@ def from_tree(
 
 
 class _Document:
-    def __init__(self, b: Builder, root: etree._Element, folder: Path, depth: int = 0) -> None:
+    def __init__(
+        self,
+        b: Builder,
+        root: etree._Element,
+        folder: Path,
+        depth: int = 0,
+        read: list[int] | None = None,
+    ) -> None:
         self.b, self.root = b, root
         self.folder, self.depth = folder, depth  # where `src` is read; documents above it
+        self.invoked = read if read is not None else [0]  # invoked documents read in all
         self.data_names: dict[str, str] = {}
         self.setup: list[etree._Element] = []  # `<data>` whose expr is computed at the start
         self.event_names: dict[str, str] = {}  # identifier -> model name
@@ -106,7 +114,7 @@ class _Document:
         states = States(self.b, actions, self.package, emitted=sg(root, "machine") is not None)
         states.setup = self.setup
         invokes = scxml_invoke.Invokes(
-            self.b, actions, inline, self.folder, self.depth, self.read_child
+            self.b, actions, inline, self.folder, self.depth, self.read_child, self.invoked
         )
         states.invokes = invokes
         states.machine(root, machine)
@@ -118,7 +126,7 @@ class _Document:
     def read_child(self, b: Builder, root: etree._Element, folder: Path) -> RawModel | None:
         """An invoked document, read as a document of its own one level deeper."""
         try:
-            model = _Document(b, root, folder, self.depth + 1).read()
+            model = _Document(b, root, folder, self.depth + 1, self.invoked).read()
         except InputError as err:
             b.diagnostics.append(err.diagnostic)
             return None

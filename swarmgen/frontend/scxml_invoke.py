@@ -23,6 +23,7 @@ from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, local
 
 SCXML_TYPES = frozenset({"http://www.w3.org/TR/scxml/", "http://www.w3.org/TR/scxml", "scxml"})
 MAX_NESTING = 8  # documents invoked inside invoked documents, when read
+MAX_DOCUMENTS = 64  # invoked documents one document reads in all (fan-out times nesting)
 _READ_ATTRIBUTES = frozenset(
     {"type", "typeexpr", "src", "id", "idlocation", "namelist", "autoforward"}
 )
@@ -60,6 +61,7 @@ class Invokes:
     folder: Path  # the document's folder: `src` is read below it
     depth: int  # how many documents invoke this one
     read_child: ReadChild
+    read: list[int]  # invoked documents read so far for the top document (shared, one item)
     sessions: dict[str, RawModel] = field(default_factory=dict)
 
     def state(self, node: etree._Element, vertex: RawElement) -> None:
@@ -151,6 +153,10 @@ class Invokes:
     def _session(self, node: etree._Element) -> RawModel | None:
         if self.depth >= MAX_NESTING:
             self.b.report(dg.SCXML_INVOKE, node, "nesting", limit=MAX_NESTING)
+            return None
+        self.read[0] += 1
+        if self.read[0] > MAX_DOCUMENTS:
+            self.b.report(dg.SCXML_INVOKE, node, "many", limit=MAX_DOCUMENTS)
             return None
         inline = self.inline.get(node)
         src = node.get("src")

@@ -97,7 +97,7 @@ class Invoke:
     `typeexpr` computes, the data it is given (`namelist` and `<param>`s), `<finalize>` and
     `autoforward`. The engine runs it (`sessions`), on the parent's host."""
 
-    chart: Chart
+    chart: Callable[[Context], Chart]  # builds the child's chart (once: `sessions.chart_of`)
     invokeid: str | None = None  # `id`; None: the engine makes `<state id>.<n>`
     idlocation: str | None = None  # the datum the made id is written to
     type: Callable[[Context], Any] | None = None  # `typeexpr`

@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from .chart import Call, Invoke, Node, record
+from .chart import Call, Chart, Context, Invoke, Node, record
 from .host import Event, Host
 
 if TYPE_CHECKING:
@@ -29,6 +29,9 @@ if TYPE_CHECKING:
 SCXML_TYPES = frozenset({"http://www.w3.org/TR/scxml/", "http://www.w3.org/TR/scxml", "scxml"})
 MAX_DEPTH = 16  # sessions invoked inside each other at run time (a chart that invokes itself)
 _serials = itertools.count(1)
+# The charts invokes built, by invoke (the invoke kept, so its id is not reused): a chart is
+# built once and shared by its sessions, as a member's chart is by its engines.
+_CHARTS: dict[int, tuple[Invoke, Chart]] = {}
 
 
 @dataclass
@@ -126,7 +129,12 @@ class Sessions:
         path = (*parent.path, invokeid)
         host = ChildHost(parent.root_host, path, serial)
         child = type(parent)(
-            invoke.chart, host, parent.member_id, parent.clock, parent.on_error, parent.on_log
+            chart_of(invoke, ctx),
+            host,
+            parent.member_id,
+            parent.clock,
+            parent.on_error,
+            parent.on_log,
         )
         child.path, child.root_host, child.serial = path, parent.root_host, serial
         child.parent_sessions, child.invokeid = self, invokeid
@@ -165,7 +173,8 @@ class Sessions:
             if event.session in self.cancelled:
                 return False
             child = self.current(event)
-            if child is not None and child.invoke.finalize is not None:
+            # not on its done.invoke, which the platform sends, not the child (as Qt SCXML)
+            if child and child.invoke.finalize and not event.name.startswith("done.invoke."):
                 self.engine.run_finalize(child.invoke.finalize, child.node)
         for child in list(self.active.values()):
             if child.invoke.autoforward and child.engine.running:
@@ -200,6 +209,16 @@ class Sessions:
         if data is not None and not isinstance(data, Mapping):
             done.data = data
         self.to_parent(done, sender)
+
+
+def chart_of(invoke: Invoke, ctx: Context) -> Chart:
+    """The invoke's chart, built on its first start."""
+    held = _CHARTS.get(id(invoke))
+    if held is not None and held[0] is invoke:
+        return held[1]
+    chart = invoke.chart(ctx)
+    _CHARTS[id(invoke)] = (invoke, chart)
+    return chart
 
 
 def halt(child: Child) -> None:
