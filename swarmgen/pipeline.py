@@ -10,7 +10,7 @@ import gc
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
@@ -253,4 +253,9 @@ def convert_model(path: Path, interfaces: Sequence[Path] = ()) -> Conversion:
         validation = _validate_loaded(path, raw, found, interfaces)
         if raw is None or validation.model is None or dg.has_errors(validation.diagnostics):
             return Conversion(validation, None)
+        invokes = [e for e in raw.elements() if e.feature == "invoke" and e.uml_type == "Invoke"]
+        if invokes:  # the profile has no invoke: writing the rest would drop the sessions
+            refused = dg.SCXML_INVOKE.at(invokes[0].span, "convert")
+            found = dg.normalise([*validation.diagnostics, refused])
+            return Conversion(replace(validation, diagnostics=found), None)
         return Conversion(validation, write_xmi(raw))

@@ -15,6 +15,7 @@ import pytest
 from swarmgen import pipeline, replay
 from swarmgen.conformance import irp
 from tests.conftest import run_cli
+from tests.skips import need_rclpy
 
 BACKENDS = ("asyncio", "smach", "scxml")
 FIXTURES = Path(__file__).parent / "fixtures" / "invoke"
@@ -54,6 +55,16 @@ def test_sessions_agree_in_every_backend(tmp_path: Path, qt_available: None) -> 
     assert left["active"] == waited["active"] == ["s3"]  # `late` was cancelled with s2
     assert finished["active"] == ["pass_"]
     assert all(step["errors"] == 0 for step in traces["scxml"])
+
+
+def test_sessions_run_the_same_on_rclpy(tmp_path: Path) -> None:
+    """The ROS node processes an event as it arrives: a child's first events reach its parent
+    while the parent is still starting it, and wait for the parent's macrostep to end."""
+    need_rclpy()
+    source = tmp_path / "parent.scxml"
+    shutil.copy(FIXTURES / "parent.scxml", source)
+    ours = _normalised(replay.replay(source, "Parent", STEPS, "asyncio"))
+    assert _normalised(replay.replay(source, "Parent", STEPS, "rclpy")) == ours
 
 
 def test_a_src_document_runs_as_its_inline_copy_in_qt(tmp_path: Path, qt_available: None) -> None:
@@ -176,3 +187,17 @@ def test_invoked_documents_are_bounded_in_number(tmp_path: Path) -> None:
     source.write_text(_doc(f'<state id="s0">{three}</state>'))
     found = pipeline.validate(source).diagnostics
     assert any(d.code.id == "SG070" and "more than 64" in d.message for d in found), found
+
+
+def test_convert_and_verify_refuse_a_document_with_invokes(tmp_path: Path) -> None:
+    """The swarm profile has no invoke: convert writes nothing (SG070 at the invoke); the
+    verifier does not explore child sessions and says so."""
+    converted = run_cli("convert", str(FIXTURES / "parent.scxml"), "-o", str(tmp_path / "p.xmi"))
+    assert converted.returncode == 2
+    assert "parent.scxml:7:5: error: <invoke> has no form in UML XMI" in converted.stderr
+    assert not (tmp_path / "p.xmi").exists()
+    verified = run_cli("verify", str(FIXTURES / "parent.scxml"))
+    assert verified.returncode == 2
+    assert "invokes SCXML sessions (<invoke>), which the verifier does not explore" in (
+        verified.stderr
+    )

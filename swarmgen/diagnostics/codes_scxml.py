@@ -169,6 +169,10 @@ SCXML_INVOKE = register(
             "a document and the documents it invokes invoke more than {limit} documents",
             "invoke fewer documents",
         ),
+        "convert": M(
+            "<invoke> has no form in UML XMI: the swarm profile has no invoked sessions",
+            "keep the SCXML document as the model (compile reads it); convert writes no XMI for it",
+        ),
         "attribute": M(
             "{attribute} on <invoke> is not read: {why}",
             "docs/scxml-input.md, Invoke, lists what the reader accepts",

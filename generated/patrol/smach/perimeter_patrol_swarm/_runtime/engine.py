@@ -97,11 +97,44 @@ class Engine:
         if root.initial is None:
             raise ValueError(f"chart {self.chart.name} has no initial state")
         self._cfg = None
+        if self.sessions is not None:  # a child may send to it before the macrostep ends
+            self._one_at_a_time(None)
+            return
         self._enter(self._configuration().plan((root.initial,), self.history))
         self._macrostep()
 
+    def _one_at_a_time(self, event: Event | None) -> None:
+        """The start (`event` None) or one event, then the events that arrived during its
+        macrostep: a host that processes what it is given at once (the ROS node) would run
+        this engine inside its own macrostep when a child it starts sends to it."""
+        sessions = self.sessions
+        assert sessions is not None
+        if sessions.stepping:
+            if event is not None:
+                sessions.waiting.append(event)
+            return
+        sessions.stepping = True
+        try:
+            initial = self.chart.root.initial
+            if event is None and initial is not None:  # `start`, which checked `initial`
+                self._enter(self._configuration().plan((initial,), self.history))
+                self._macrostep()
+            elif event is not None:
+                self._step(event)
+            while sessions.waiting and self.running:
+                self._step(sessions.waiting.popleft())
+        finally:
+            sessions.stepping = False
+            sessions.waiting.clear()
+
     def send(self, event: Event) -> None:
         """Process one external event completely (one macrostep)."""
+        if self.sessions is not None:
+            self._one_at_a_time(event)
+        else:
+            self._step(event)
+
+    def _step(self, event: Event) -> None:
         if not self.running:
             return
         if event.to is not None and event.to != self.path:  # for an invoked session

@@ -14,6 +14,7 @@ drops the ones still queued (W3C 6.4.1).
 from __future__ import annotations
 
 import itertools
+from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -104,6 +105,9 @@ class Sessions:
         # numbers of the children cancelled while they ran: what they sent is dropped (a child
         # that finished first keeps its events, done.invoke too: W3C test 236)
         self.cancelled: set[int] = set()
+        # what arrived while the engine was in a macrostep (`Engine._one_at_a_time`)
+        self.stepping = False
+        self.waiting: deque[Event] = deque()
 
     def start(self, node: Node) -> None:
         """Start the invokes of a state that stayed active to the end of the macrostep."""
