@@ -29,7 +29,6 @@ if TYPE_CHECKING:
 # last slash) and the short form
 SCXML_TYPES = frozenset({"http://www.w3.org/TR/scxml/", "http://www.w3.org/TR/scxml", "scxml"})
 MAX_DEPTH = 16  # sessions invoked inside each other at run time (a chart that invokes itself)
-_serials = itertools.count(1)
 # The charts invokes built, by invoke (the invoke kept, so its id is not reused): a chart is
 # built once and shared by its sessions, as a member's chart is by its engines.
 _CHARTS: dict[int, tuple[Invoke, Chart]] = {}
@@ -102,6 +101,9 @@ class Sessions:
     def __init__(self, engine: Engine) -> None:
         self.engine = engine
         self.active: dict[str, Child] = {}
+        # numbers of the children it starts: made invoke ids and the tags of their events
+        # (per engine, so a member's run does not depend on what else ran in the process)
+        self.serials = itertools.count(1)
         # numbers of the children cancelled while they ran: what they sent is dropped (a child
         # that finished first keeps its events, done.invoke too: W3C test 236)
         self.cancelled: set[int] = set()
@@ -120,7 +122,7 @@ class Sessions:
     def _start(self, node: Node, invoke: Invoke) -> None:
         parent = self.engine
         ctx = parent.ctx
-        serial = next(_serials)
+        serial = next(self.serials)
         invokeid = invoke.invokeid or f"{node.id}.{serial}"
         if invoke.idlocation is not None:  # written first, as W3C's idlocation
             parent.data[invoke.idlocation] = invokeid
