@@ -154,6 +154,7 @@ BAD = {
     "namelist": (f'<invoke namelist="&quot;x">{CHILD.format("")}</invoke>', "SG070"),
     "not scxml": ('<invoke src="c.xml"/>', "SG070"),
     "missing": ('<invoke src="none.scxml"/>', "SG001"),
+    "finalize outside": ("<finalize/>", "SG060"),
     "bad child": (
         '<invoke><content><scxml version="1.0" initial="nowhere"><state id="a"/></scxml>'
         "</content></invoke>",
@@ -187,6 +188,15 @@ def test_invoked_documents_are_bounded_in_number(tmp_path: Path) -> None:
     source.write_text(_doc(f'<state id="s0">{three}</state>'))
     found = pipeline.validate(source).diagnostics
     assert any(d.code.id == "SG070" and "more than 64" in d.message for d in found), found
+
+
+def test_an_invoke_in_a_final_state_is_refused(tmp_path: Path) -> None:
+    source = tmp_path / "final.scxml"
+    invoke = f'<invoke type="scxml">{CHILD.format("")}</invoke>'
+    source.write_text(_doc(f'<state id="s0"/><final id="f">\n{invoke}</final>'))
+    found = pipeline.validate(source).diagnostics
+    assert [(d.code.id, d.span.line) for d in found] == [("SG060", 2)]
+    assert "read in a <state> or <parallel> only" in found[0].message
 
 
 def test_convert_and_verify_refuse_a_document_with_invokes(tmp_path: Path) -> None:

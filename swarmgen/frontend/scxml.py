@@ -33,6 +33,12 @@ _SG_ELEMENTS = {
     "call", "arg", "result", "send", "param", "opaque", "member", "hardware", "library",
     "behaviour", "input", "output", "events", "event", "field",
 }  # fmt: skip
+# where an element is read: (its possible parents, why elsewhere is not)
+_PLACES = {
+    "donedata": (("final",), "done data is read in a <final> only"),
+    "finalize": (("invoke",), "<finalize> is read in an <invoke> only"),
+    "invoke": (("state", "parallel"), "an invoke is read in a <state> or <parallel> only"),
+}
 _DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
 
 
@@ -150,11 +156,10 @@ class _Document:
                     )
                 seen.setdefault(str(ident), node)
             parent = node.getparent()
-            misplaced = (tag == "donedata" and (parent is None or local(parent) != "final")) or (
-                tag == "finalize" and (parent is None or local(parent) != "invoke")
-            )
-            if in_scxml(node) and misplaced:
-                self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why="not in the IR yet")
+            owner = local(parent) if parent is not None else ""
+            place = _PLACES.get(tag)
+            if in_scxml(node) and place is not None and owner not in place[0]:
+                self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why=place[1])
             if in_scxml(node) and tag == "script" and not self.support_script(node):
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,
