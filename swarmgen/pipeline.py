@@ -10,7 +10,7 @@ import gc
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
@@ -23,6 +23,7 @@ from swarmgen.chart.model import Chart
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend import RawModel, load
 from swarmgen.generated import header, markdown_cell
+from swarmgen.ir import query
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
 from swarmgen.ros.idl_index import InterfaceIndex, default_roots
@@ -105,10 +106,15 @@ def _validate_loaded(
         return Validation(model, dg.normalise(found))
     index = interface_index(path, interfaces)
     found += check.run(model, index)
+    children = query.sessions(model)  # invoked documents: checked as models of their own
+    for child in children:
+        found += check.run(child, index)
     if not check.may_lower(found):
         return Validation(model, dg.normalise(found), interfaces=index)
     charts = lower(model)
     found += chart_checks.run(model, charts)
+    for child in children:
+        found += chart_checks.run(child, lower(child))
     return Validation(model, dg.normalise(found), charts, index)
 
 
@@ -247,4 +253,9 @@ def convert_model(path: Path, interfaces: Sequence[Path] = ()) -> Conversion:
         validation = _validate_loaded(path, raw, found, interfaces)
         if raw is None or validation.model is None or dg.has_errors(validation.diagnostics):
             return Conversion(validation, None)
+        invokes = [e for e in raw.elements() if e.feature == "invoke" and e.uml_type == "Invoke"]
+        if invokes:  # the profile has no invoke: writing the rest would drop the sessions
+            refused = dg.SCXML_INVOKE.at(invokes[0].span, "convert")
+            found = dg.normalise([*validation.diagnostics, refused])
+            return Conversion(replace(validation, diagnostics=found), None)
         return Conversion(validation, write_xmi(raw))

@@ -106,6 +106,9 @@ def test_a_pass_is_real_swapping_the_targets_makes_it_fail(
     passed = [t for t in irp.tests(IRP) if ours[t.id].result == "pass"]
     assert len(passed) >= 10
     for test in passed:
+        for document in test.documents:  # the documents its `<invoke src>`s read, beside it
+            for sub in sorted(document.parent.glob(f"{document.stem}sub*.txml")):
+                _swapped(sub, tmp_path)
         mutated = irp.Test(
             test.id, test.mandatory, tuple(_swapped(d, tmp_path) for d in test.documents)
         )

@@ -21,6 +21,8 @@ RUNTIME_MODULES = (
     "microstep",
     "configuration",
     "engine",
+    "sends",
+    "sessions",
     "member",
     "simulated",
     "args",

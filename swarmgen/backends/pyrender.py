@@ -55,6 +55,8 @@ RETURNS = {
     "args": "dict[str, Any]",
     "goal": "dict[str, Any]",
     "donedata": "Any",
+    "value": "Any",
+    "session": "Chart",
 }
 
 
@@ -99,6 +101,7 @@ class ChartCode:
     # each in black's layout (`pylayout`) for `build()`: further lines carry their indentation
     statements: list[str] = field(default_factory=list)
     data_literal: str = "{}"
+    sessions: int = 0  # invoked sessions' builders (`_session_<n>`): the module imports `Invoke`
 
 
 def py_literal(value: Any) -> str:
@@ -170,6 +173,44 @@ class ChartRenderer:
             self._node(node, None)
         self.code.statements.append(f"b.initial(None, {tuple(self.chart.initial)!r})")
         return self.code
+
+    def _session(self, chart: c.Chart) -> str:
+        """An invoked chart's builder: a helper function `_session_<n>(ctx) -> Chart` of its
+        own `ChartBuilder` statements (the engine calls it once), its helper functions
+        numbered on with this chart's."""
+        child = ChartRenderer(chart)
+        child.code = ChartCode(functions=self.code.functions)
+        child._counter = self._counter
+        child.render()
+        self._counter = child._counter
+        self.code.sessions += 1 + child.code.sessions
+        head = f"b = ChartBuilder({chart.name!r}, data={child.code.data_literal}, "
+        body = [head + f"events={event_fields_literal(chart)})", *child.code.statements]
+        reads = self._reads_data
+        self._reads_data = False
+        name = self._function("session", [*body, "return b.build()"])
+        self._reads_data = reads
+        return name
+
+    def _invoke(self, invoke: c.Invoke) -> pylayout.Call:
+        """`Invoke(<chart>, ...)` of a state's `invokes=` option, its chart rendered first."""
+        parts: list[pylayout.Arg] = [self._session(invoke.chart)]
+        if invoke.invokeid is not None:
+            parts.append(f"invokeid={invoke.invokeid!r}")
+        if invoke.idlocation is not None:
+            parts.append(f"idlocation={invoke.idlocation!r}")
+        if invoke.kind_expr is not None:
+            kind = self._function("value", [f"return {_unwrap(self.py(invoke.kind_expr))}"])
+            parts.append(f"type={kind}")
+        if invoke.params:
+            items = ", ".join(f"{p.name!r}: {self.py(p.value)}" for p in invoke.params)
+            parts.append(f"args={self._function('args', [f'return {{{items}}}'])}")
+        finalize = self._action(invoke.finalize)
+        if finalize is not None:
+            parts.append(f"finalize={finalize}")
+        if invoke.autoforward:
+            parts.append("autoforward=True")
+        return pylayout.Call("Invoke", tuple(parts))
 
     # --- expressions
 
@@ -347,6 +388,9 @@ class ChartRenderer:
             options.append(pylayout.Kw("call=", pylayout.Call("Call", tuple(parts))))
         if node.timers:
             options.append(f"timers={tuple((t.event, t.delay_ms) for t in node.timers)!r}")
+        if node.invokes:
+            invokes = ", ".join(pylayout.flat(self._invoke(i)) for i in node.invokes)
+            options.append(f"invokes=({invokes},)")  # an atom: formatted by `format_python`
         self._statement("b.node", repr(node.id), repr(node.kind), repr(parent), *options)
         if node.initial is not None:
             action = self._action(node.initial.actions)

@@ -46,6 +46,7 @@ class SmachCode:
 
     functions: list[Function]
     factories: list[Factory]
+    sessions: int = 0  # invoked charts: the module imports `ChartBuilder` and `Invoke`
 
 
 class SmachRenderer(ChartRenderer):
@@ -91,7 +92,7 @@ class SmachRenderer(ChartRenderer):
         for node in self.chart.children:
             top.lines.append(INDENT + self._add("StateMachine", node))
         top.lines.append("return sm")
-        return SmachCode(self.code.functions, self.factories)
+        return SmachCode(self.code.functions, self.factories, self.code.sessions)
 
     # --- containers
 
@@ -196,6 +197,9 @@ class SmachRenderer(ChartRenderer):
         options.extend(self._hooks(node))
         if node.timers:
             options.append(f"timers={[(t.event, t.delay_ms) for t in node.timers]!r}")
+        if node.invokes:
+            invokes = ", ".join(pylayout.flat(self._invoke(i)) for i in node.invokes)
+            options.append(f"invokes=[{invokes}]")  # formatted by `format_python`
         return options
 
     def _behaviour(self, call: c.Call, remapping: dict[str, str]) -> list[str]:

@@ -28,6 +28,7 @@ from swarmgen.ir.nodes import (
     Behaviour,
     Event,
     FinalState,
+    Invoke,
     Machine,
     Model,
     PseudoKind,
@@ -287,6 +288,26 @@ class _Lowering(Transitions):
             timers=tuple(self._timers(copy, state, sid)),
             transitions=tuple(t for t in transitions if t is not None),
             submachine=sub.name if sub is not None else None,
+            invokes=tuple(self._invoke(i) for i in state.invokes),
+        )
+
+    def _invoke(self, invoke: Invoke) -> c.Invoke:
+        """The child's own chart (lowered as a model of its own) and what the parent gives
+        it: params by the child's data ids (a name the child does not declare sets nothing)."""
+        chart = lower(invoke.session)[0]
+        child_ids = {d.name: d.id for d in chart.data}
+        location = self.data.get(invoke.idlocation or "")
+        return c.Invoke(
+            chart=chart,
+            invokeid=invoke.invokeid,
+            idlocation=location.ident if location is not None else None,
+            kind=invoke.kind,
+            kind_expr=invoke.kind_expr,
+            autoforward=invoke.autoforward,
+            params=tuple(
+                c.Param(child_ids[p.name], p.value) for p in invoke.params if p.name in child_ids
+            ),
+            finalize=self._actions(invoke.finalize, ()),
         )
 
     def _call(self, state: State) -> c.Call | None:

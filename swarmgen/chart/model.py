@@ -188,6 +188,21 @@ def takes_outcome(events: tuple[str, ...], state_id: str) -> bool:
 
 
 @dataclass(frozen=True, slots=True)
+class Invoke:
+    """A child SCXML session the state runs while it is active (W3C `<invoke>`): its lowered
+    chart and what the parent gives it (docs/semantics.md, "Invoked sessions")."""
+
+    chart: Chart
+    invokeid: str | None = None
+    idlocation: str | None = None  # the parent's data id the made invoke id is written to
+    kind: str | None = None  # `type` as written
+    kind_expr: expr.Expr | None = None  # `typeexpr`
+    autoforward: bool = False
+    params: tuple[Param, ...] = ()  # by the child's data ids: the values they start with
+    finalize: tuple[Action, ...] = ()
+
+
+@dataclass(frozen=True, slots=True)
 class Node:
     """A state, parallel state, final state or history node of the chart, with its children."""
 
@@ -207,6 +222,7 @@ class Node:
     pseudostate: str | None = None  # choice, junction, fork, entryPoint, ... (transient states)
     donedata: tuple[Param, ...] = ()  # a final state's: the fields of its done.state event
     donecontent: expr.Expr | None = None  # or the event's whole data
+    invokes: tuple[Invoke, ...] = ()
 
 
 @dataclass(frozen=True, slots=True)

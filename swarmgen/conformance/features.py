@@ -55,6 +55,8 @@ def feature(diagnostic: Diagnostic, root: etree._Element | None = None) -> str:
         return "data in a state's <datamodel>" if name.startswith("Var") else _expression(name)
     if code == "SG061" and message.startswith("src="):
         return "data src/content"
+    if code == "SG070":
+        return _invoke(message)
     if code == "SG061" and "is not an element of SCXML" in message:
         return "XML content (data, assign, send)"
     if code != "SG060":
@@ -74,6 +76,18 @@ def feature(diagnostic: Diagnostic, root: etree._Element | None = None) -> str:
     if element == "assign":
         return "assign: location or content"
     return _ELEMENTS.get(element, f"<{element}>")
+
+
+def _invoke(message: str) -> str:
+    """What an `<invoke>` swarmgen does not run needs: a computed document, a document in
+    `<content expr>`, a namelist of no data ids, another type."""
+    if "srcexpr" in message:
+        return "invoke: srcexpr (a document computed at run time)"
+    if "no document" in message:
+        return "invoke: <content expr> (a document computed at run time)"
+    if "namelist" in message:
+        return "invoke: a namelist naming no data"
+    return "invoke"
 
 
 def _quoted(message: str, quote: str = '"') -> str | None:

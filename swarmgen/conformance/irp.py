@@ -102,6 +102,8 @@ def run_test(transform: etree.XSLT, test: Test, work: Path) -> Outcome:
         for data in txml.parent.glob(f"{txml.stem}*.txt"):  # `<data src>`'s, beside it
             if not (work / data.name).exists():
                 shutil.copy(data, work / data.name)
+        for sub in sorted(txml.parent.glob(f"{txml.stem}sub*.txml")):  # `<invoke src>`'s
+            (work / f"{sub.stem}.scxml").write_bytes(convert(transform, sub))
         outcome = run_document(convert(transform, txml), work / f"{txml.stem}.scxml")
         if outcome.result != "pass":
             return outcome
@@ -159,7 +161,8 @@ class VirtualHost:
         self.delayed: dict[int, tuple[str, Event]] = {}
 
     def start_call(self, node: Node, call: Call, args: dict[str, Any], activation: int) -> None:
-        """No IRP test calls a swarmgen behaviour (the front end refuses `<invoke>`)."""
+        """No IRP test calls a swarmgen behaviour (its `<invoke>`s are SCXML sessions, which
+        the engine runs itself)."""
 
     def cancel_call(self, node: Node, activation: int) -> None:
         """Nothing runs, so nothing is cancelled."""

@@ -147,6 +147,38 @@ CPSWARM_NOTE = register(
         ),
     },
 )
+SCXML_INVOKE = register(
+    "SG070",
+    "scxml-invoke",
+    "an SCXML `<invoke>` of an SCXML session swarmgen cannot run: a document it cannot read "
+    "safely or computes only at run time, a namelist naming no data, nesting too deep",
+    input_error=True,
+    message="<invoke> has no document to run: {why}",
+    hint="give src, or <content> holding one <scxml> element (docs/scxml-input.md, Invoke)",
+    variants={
+        "src": M(
+            '<invoke src="{src}"> is not read: {why}',
+            "give a file beside the document or below its folder, or the document inline "
+            "in <content>",
+        ),
+        "nesting": M(
+            "invoked documents nest deeper than {limit} (a document that invokes itself?)",
+            "invoke fewer levels of documents",
+        ),
+        "many": M(
+            "a document and the documents it invokes invoke more than {limit} documents",
+            "invoke fewer documents",
+        ),
+        "convert": M(
+            "<invoke> has no form in UML XMI: the swarm profile has no invoked sessions",
+            "keep the SCXML document as the model (compile reads it); convert writes no XMI for it",
+        ),
+        "attribute": M(
+            "{attribute} on <invoke> is not read: {why}",
+            "docs/scxml-input.md, Invoke, lists what the reader accepts",
+        ),
+    },
+)
 
 __all__ = [
     "CPSWARM_CAVEAT",
@@ -155,5 +187,6 @@ __all__ = [
     "SCXML_BAD_DOCUMENT",
     "SCXML_DATAMODEL",
     "SCXML_EXPRESSION",
+    "SCXML_INVOKE",
     "SCXML_UNSUPPORTED",
 ]

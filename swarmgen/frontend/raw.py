@@ -107,6 +107,8 @@ class RawModel:
     index: dict[str, RawElement]
     stereotypes: list[StereotypeApplication]
     exporter: str  # "modelio", "eclipse-uml2", "papyrus", ... (informative)
+    # the documents of the SCXML `<invoke>`s, by the `session` attribute of their element
+    sessions: dict[str, RawModel] = field(default_factory=dict)
 
     def elements(self) -> Iterator[RawElement]:
         """Every element of every root, depth first in document order."""

@@ -15,7 +15,7 @@ from lxml import etree
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import Diagnostic, Severity
-from swarmgen.frontend import scxml_cpswarm
+from swarmgen.frontend import scxml_cpswarm, scxml_invoke
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError
 from swarmgen.frontend.scxml_actions import Actions
@@ -34,6 +34,12 @@ _SG_ELEMENTS = {
     "call", "arg", "result", "send", "param", "opaque", "member", "hardware", "library",
     "behaviour", "input", "output", "events", "event", "field",
 }  # fmt: skip
+# where an element is read: (its possible parents, why elsewhere is not)
+_PLACES = {
+    "donedata": (("final",), "done data is read in a <final> only"),
+    "finalize": (("invoke",), "<finalize> is read in an <invoke> only"),
+    "invoke": (("state", "parallel"), "an invoke is read in a <state> or <parallel> only"),
+}
 _DEFAULT_OUTCOMES = ("succeeded", "aborted", "preempted")
 
 
@@ -43,7 +49,7 @@ def from_tree(
     """The raw model of a parsed SCXML document (`text`: its decoded source, for columns)."""
     b = Builder(shown, text.splitlines())
     try:
-        model = _Document(b, tree.getroot()).read()
+        model = _Document(b, tree.getroot(), Path(shown).parent).read()
     except InputError as err:
         return None, [err.diagnostic]
     if any(d.severity == Severity.ERROR for d in b.diagnostics):
@@ -52,8 +58,17 @@ def from_tree(
 
 
 class _Document:
-    def __init__(self, b: Builder, root: etree._Element) -> None:
+    def __init__(
+        self,
+        b: Builder,
+        root: etree._Element,
+        folder: Path,
+        depth: int = 0,
+        read: list[int] | None = None,
+    ) -> None:
         self.b, self.root = b, root
+        self.folder, self.depth = folder, depth  # where `src` is read; documents above it
+        self.invoked = read if read is not None else [0]  # invoked documents read in all
         self.data_names: dict[str, str] = {}
         self.setup: list[etree._Element] = []  # `<data>` whose expr is computed at the start
         self.event_names: dict[str, str] = {}  # identifier -> model name
@@ -66,6 +81,7 @@ class _Document:
 
     def read(self) -> RawModel:
         root = self.root
+        inline = scxml_invoke.detach(root)  # the invoked documents are read on their own
         scxml_cpswarm.lower(self.b, root)  # the CPSwarm dialect into sg: elements, in place
         self.check_elements()
         language = str(root.get("datamodel", "ecmascript"))
@@ -104,9 +120,24 @@ class _Document:
         )
         states = States(self.b, actions, self.package, emitted=sg(root, "machine") is not None)
         states.setup = self.setup
+        invokes = scxml_invoke.Invokes(
+            self.b, actions, inline, self.folder, self.depth, self.read_child, self.invoked
+        )
+        states.invokes = invokes
         states.machine(root, machine)
         states.resolve()
-        return RawModel(self.b.file, [self.model], self.b.index, self.b.stereotypes, "scxml")
+        model = RawModel(self.b.file, [self.model], self.b.index, self.b.stereotypes, "scxml")
+        model.sessions = invokes.sessions
+        return model
+
+    def read_child(self, b: Builder, root: etree._Element, folder: Path) -> RawModel | None:
+        """An invoked document, read as a document of its own one level deeper."""
+        try:
+            model = _Document(b, root, folder, self.depth + 1, self.invoked).read()
+        except InputError as err:
+            b.diagnostics.append(err.diagnostic)
+            return None
+        return None if any(d.severity == Severity.ERROR for d in b.diagnostics) else model
 
     def check_elements(self) -> None:
         """Unknown SCXML elements, duplicate ids, scripts other than the support script."""
@@ -126,9 +157,10 @@ class _Document:
                     )
                 seen.setdefault(str(ident), node)
             parent = node.getparent()
-            misplaced = tag == "donedata" and (parent is None or local(parent) != "final")
-            if in_scxml(node) and (tag in ("invoke", "finalize") or misplaced):
-                self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why="not in the IR yet")
+            owner = local(parent) if parent is not None else ""
+            place = _PLACES.get(tag)
+            if in_scxml(node) and place is not None and owner not in place[0]:
+                self.b.report(dg.SCXML_UNSUPPORTED, node, element=tag, why=place[1])
             if in_scxml(node) and tag == "script" and not self.support_script(node):
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,

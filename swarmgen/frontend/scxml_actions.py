@@ -486,8 +486,8 @@ class Actions:
                 found.append(("*", self.any_ref()))
             elif event.removesuffix(".*") in ("error", "error.execution", "error.communication"):
                 found.append((event.removesuffix(".*"), None))
-            elif event.removesuffix(".*") in ("done", "done.state") or (
-                event.startswith("done.state.") and len(event) > 11
+            elif event.removesuffix(".*") in ("done", "done.state", "done.invoke") or (
+                event.startswith(("done.state.", "done.invoke.")) and not event.endswith(".")
             ):
                 found.append((event.removesuffix(".*"), None))  # another state's completion
             elif (

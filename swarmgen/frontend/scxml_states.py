@@ -16,6 +16,7 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen.frontend.raw import RawElement
 from swarmgen.frontend.scxml_actions import Actions
+from swarmgen.frontend.scxml_invoke import Invokes
 from swarmgen.frontend.scxml_raw import Builder, children, local, sg
 
 _STATES = ("state", "parallel", "final", "history")
@@ -45,6 +46,7 @@ class States:
     emitted: bool = False  # a document swarmgen wrote (the root has sg:machine)
     # `<data expr>` computed at the start: assigned by the first initial transition made
     setup: list[etree._Element] = field(default_factory=list)
+    invokes: Invokes | None = None  # reads each state's `<invoke>`s
 
     def machine(self, root: etree._Element, machine: RawElement) -> None:
         """The document's top level as the machine's region(s)."""
@@ -264,6 +266,8 @@ class States:
         vertex = self.b.make("subvertex", "State", region, node, {"name": name}, ident)
         self.vertices[ident] = vertex
         call = self.actions.state_behaviour(node, vertex)
+        if self.invokes is not None:
+            self.invokes.state(node, vertex)
         for transition in children(node, "transition"):
             self.state_transition(region, vertex, ident, transition, call)
         submachine = sg(node, "submachine")

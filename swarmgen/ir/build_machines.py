@@ -11,6 +11,7 @@ from swarmgen.ir.build_context import (
     is_part,
     label,
 )
+from swarmgen.ir.build_invoke import invokes_of
 from swarmgen.ir.build_transitions import MachineContext, read_transition
 from swarmgen.ir.nodes import (
     ConnectionRef,
@@ -211,5 +212,6 @@ def _state(b: Builder, element: RawElement, ctx: MachineContext) -> State:
         entry=entry,
         exit=exit_,
         opaque=tuple(opaque),
+        invokes=invokes_of(b, element),
         span=element.span,
     )

@@ -179,7 +179,9 @@ def _named_trigger(
     if name.removesuffix(".*") in ERROR_EVENTS:  # W3C's platform errors (docs/semantics.md)
         return Trigger(kind=TriggerKind.ERROR, name=name.removesuffix(".*"), span=element.span)
     done = name.removesuffix(".*")
-    if done in ("done", "done.state") or (done.startswith("done.state.") and len(done) > 11):
+    if done in ("done", "done.state", "done.invoke") or (
+        done.startswith(("done.state.", "done.invoke.")) and not done.endswith(".")
+    ):
         # another state's completion (its own is a triggerless transition): docs/semantics.md
         return Trigger(kind=TriggerKind.DONE, name=done, span=element.span)
     if name in DEFAULT_OUTCOMES or behaviour is not None:

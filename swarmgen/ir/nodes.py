@@ -262,6 +262,24 @@ class ConnectionRef(Node):
     span: Span
 
 
+class Invoke(Node):
+    """A child SCXML session a state runs while it is active (W3C `<invoke>`, SCXML input
+    only: docs/scxml-input.md): its whole model, the id or the datum its made id goes to, its
+    type (`kind` as written, or `kind_expr`), the child's data it sets (`params`: namelist and
+    `<param>`s), `<finalize>` and `autoforward`."""
+
+    type: Literal["invoke"] = "invoke"
+    invokeid: str | None = None
+    idlocation: str | None = None  # a datum's name
+    kind: str | None = None
+    kind_expr: Expr | None = None
+    autoforward: bool = False
+    params: tuple[Binding, ...] = ()
+    finalize: tuple[Action, ...] = ()
+    session: Model
+    span: Span
+
+
 class State(Node):
     """A simple, composite or submachine state with its actions and activity."""
 
@@ -276,6 +294,7 @@ class State(Node):
     entry: tuple[Action, ...] = ()
     exit: tuple[Action, ...] = ()
     opaque: tuple[OpaqueCode, ...] = ()
+    invokes: tuple[Invoke, ...] = ()
     span: Span
 
 

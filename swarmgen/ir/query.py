@@ -242,3 +242,16 @@ def incoming(machine: Machine) -> dict[str, list[Transition]]:
 def initial_of(region: Region) -> list[Pseudostate]:
     """The region's initial pseudostates (a well-formed region has one)."""
     return [v for v in region.vertices if isinstance(v, Pseudostate) and v.kind == "initial"]
+
+
+def sessions(model: Model) -> list[Model]:
+    """The models of every `<invoke>`d document below this one (their own too), depth first:
+    the checks run on each as on a model of its own."""
+    found: list[Model] = []
+    for machine in model.machines:
+        for placed in walk(machine):
+            if isinstance(placed.vertex, State):
+                for invoke in placed.vertex.invokes:
+                    found.append(invoke.session)
+                    found += sessions(invoke.session)
+    return found

@@ -39,6 +39,7 @@ __all__ = [
     "Cond",
     "Context",
     "Filler",
+    "Invoke",
     "Node",
     "Record",
     "StepBoundExceeded",
@@ -90,6 +91,22 @@ class Call:
     outcomes: tuple[str, ...] = ()  # the declared outcomes (raised after the outputs are written)
 
 
+@dataclass(frozen=True, slots=True)
+class Invoke:
+    """A child SCXML session a state starts while it is active (W3C `<invoke>`,
+    docs/semantics.md "Invoked sessions"): its chart, id or idlocation, the type its
+    `typeexpr` computes, the data it is given (`namelist` and `<param>`s), `<finalize>` and
+    `autoforward`. The engine runs it (`sessions`), on the parent's host."""
+
+    chart: Callable[[Context], Chart]  # builds the child's chart (once: `sessions.chart_of`)
+    invokeid: str | None = None  # `id`; None: the engine makes `<state id>.<n>`
+    idlocation: str | None = None  # the datum the made id is written to
+    type: Callable[[Context], Any] | None = None  # `typeexpr`
+    args: Callable[[Context], dict[str, Any]] | None = None  # namelist and params
+    finalize: Action | None = None
+    autoforward: bool = False
+
+
 @dataclass(eq=False, slots=True)
 class Node:
     """A state of the chart (or the root, or a history node), linked by ChartBuilder.build()."""
@@ -107,6 +124,7 @@ class Node:
     call: Call | None = None
     timers: tuple[tuple[str, int], ...] = ()  # (event, delay in ms)
     donedata: Callable[[Context], Any] | None = None  # a final state's done data
+    invokes: tuple[Invoke, ...] = ()  # child sessions started while it is active
     order: int = 0  # document order
     depth: int = 0
     ancestors: tuple[Node, ...] = ()  # proper ancestors, innermost first (root included)
@@ -360,9 +378,11 @@ class ChartBuilder:
         timers: Sequence[tuple[str, int]] = (),
         history: str = "",
         donedata: Callable[[Context], Any] | None = None,
+        invokes: Sequence[Invoke] = (),
     ) -> None:
         """Declare a node under `parent` (None: the root), after its parent; a final state's
-        `donedata` gives the fields of the done.state event entering it raises."""
+        `donedata` gives the fields of the done.state event entering it raises; `invokes` the
+        child sessions the state runs while it is active."""
         if node_id in self._nodes or not node_id:
             raise ValueError(f"duplicate or empty node id {node_id!r}")
         owner = self._nodes[parent] if parent is not None else self._root
@@ -372,6 +392,7 @@ class ChartBuilder:
         node.timers = tuple(timers)
         node.history = history
         node.donedata = donedata
+        node.invokes = tuple(invokes)
         owner.children.append(node)
         self._nodes[node_id] = node
         self._names[node_id] = name or node_id

@@ -7,7 +7,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, TypedDict, Unpack
 
-from swarmgen.runtime.chart import Action, Call, Cond, Context
+from swarmgen.runtime.chart import Action, Call, Cond, Context, Invoke
 
 
 class Placement(Protocol):
@@ -32,6 +32,7 @@ class Hooks(TypedDict, total=False):
     onentry: Action | None
     onexit: Action | None
     timers: Sequence[tuple[str, int]]
+    invokes: Sequence[Invoke]  # child SCXML sessions (W3C `<invoke>`) while it is active
 
 
 class StateOptions(Hooks, total=False):
@@ -180,8 +181,10 @@ class State:
         timers: Sequence[tuple[str, int]] = (),
         behaviour: Behaviour | None = None,
         donedata: Callable[[Context], Any] | None = None,
+        invokes: Sequence[Invoke] = (),
     ) -> None:
         self._outcomes = list(outcomes)
+        self.invokes = tuple(invokes)
         self.donedata = donedata  # a FinalState's: the fields of its done.state event
         self._input_keys = list(input_keys)
         self._output_keys = list(output_keys)

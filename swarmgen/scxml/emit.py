@@ -55,6 +55,20 @@ def emit(model: Model) -> tuple[ScxmlDocument, ...]:
 
 def serialize(chart: c.Chart) -> ScxmlDocument:
     """One chart as an SCXML document (ECMAScript datamodel, swarmgen's extensions)."""
+    scxml = _document(chart)
+    what = f"member type {chart.member}" if chart.member else f"state machine {chart.machine}"
+    comment = etree.Comment(_comment_text(f" {generated.header(chart.source, what, syntax='')} "))
+    header = '<?xml version="1.0" encoding="UTF-8"?>\n' + etree.tostring(
+        comment, encoding="unicode"
+    )
+    text = header + "\n" + etree.tostring(scxml, pretty_print=True, encoding="unicode")
+    states = sum(1 for _ in scxml.iter(*(f"{{{SCXML_NS}}}{t}" for t in _STATE_TAGS)))
+    transitions = sum(1 for _ in scxml.iter(f"{{{SCXML_NS}}}transition"))
+    return ScxmlDocument(chart.name, chart.member, chart.machine, text, states, transitions)
+
+
+def _document(chart: c.Chart) -> etree._Element:
+    """The `<scxml>` element of a chart (an invoked chart's goes into its `<content>`)."""
     scxml = etree.Element(f"{{{SCXML_NS}}}scxml", nsmap=_NSMAP)  # type: ignore[arg-type]
     scxml.set("version", "1.0")
     scxml.set("datamodel", "ecmascript")
@@ -79,15 +93,7 @@ def serialize(chart: c.Chart) -> ScxmlDocument:
     for node in chart.children:
         writer.node(scxml, node)
     _metadata(scxml, chart)
-    what = f"member type {chart.member}" if chart.member else f"state machine {chart.machine}"
-    comment = etree.Comment(_comment_text(f" {generated.header(chart.source, what, syntax='')} "))
-    header = '<?xml version="1.0" encoding="UTF-8"?>\n' + etree.tostring(
-        comment, encoding="unicode"
-    )
-    text = header + "\n" + etree.tostring(scxml, pretty_print=True, encoding="unicode")
-    states = sum(1 for _ in scxml.iter(*(f"{{{SCXML_NS}}}{t}" for t in _STATE_TAGS)))
-    transitions = sum(1 for _ in scxml.iter(f"{{{SCXML_NS}}}transition"))
-    return ScxmlDocument(chart.name, chart.member, chart.machine, text, states, transitions)
+    return scxml
 
 
 def _comment_text(text: str) -> str:
@@ -184,6 +190,8 @@ class _Writer:
             _sub(_sub(element, "donedata"), "content", {"expr": value})
         if node.call is not None:
             self.finalize(element, node.id, node.call)
+        for invoke in node.invokes:
+            self.invoke(element, invoke)
         for transition in node.transitions:
             self.transition(element, transition)
         if node.initial is not None:
@@ -241,6 +249,25 @@ class _Writer:
                 _sub(transition, "assign", {"location": location, "expr": value})
             if outcome is not None:
                 _sub(transition, "raise", {"event": f"{OUTCOME_PREFIX}{node_id}.{outcome}"})
+
+    def invoke(self, element: etree._Element, invoke: c.Invoke) -> None:
+        """W3C `<invoke>` of an SCXML session: the child's own document in `<content>`."""
+        attrs = {}
+        if invoke.kind_expr is not None:
+            attrs["typeexpr"] = self.js(invoke.kind_expr)
+        else:
+            attrs["type"] = invoke.kind or "http://www.w3.org/TR/scxml/"
+        if invoke.invokeid is not None:
+            attrs["id"] = invoke.invokeid
+        if invoke.idlocation is not None:
+            attrs["idlocation"] = invoke.idlocation
+        if invoke.autoforward:
+            attrs["autoforward"] = "true"
+        written = _sub(element, "invoke", attrs)
+        self.params(written, invoke.params, "param")
+        _sub(written, "content").append(_document(invoke.chart))
+        if invoke.finalize:
+            self.actions(_sub(written, "finalize"), invoke.finalize)
 
     def call(self, onentry: etree._Element, call: c.Call) -> None:
         element = _sub(onentry, _sg("call"), {"behaviour": call.behaviour, "type": call.kind})

@@ -61,10 +61,10 @@ class _Document:
         import xml.etree.ElementTree as ET
 
         root = ET.parse(path).getroot()
-        self.data = sorted(e.get("id", "") for e in root.iter(f"{SCXML}data"))
+        self.data = sorted(e.get("id", "") for e in _own(root, f"{SCXML}data"))
         self.calls = _calls(root)
         self.fields: dict[str, dict[str, Any]] = {}
-        for event in root.iter(f"{SG}event"):
+        for event in _own(root, f"{SG}event"):
             defaults = {
                 f.get("name", ""): json.loads(f.get("default", "null"))
                 for f in event.findall(f"{SG}field")
@@ -74,9 +74,20 @@ class _Document:
                 self.fields[event.get("id", "")] = defaults
 
 
+def _own(root: Any, tag: str | None = None) -> list[Any]:
+    """The document's elements (of `tag`), without those of the documents it invokes."""
+    found, stack = [], [root]
+    while stack:
+        element = stack.pop()
+        if tag is None or element.tag == tag:
+            found.append(element)
+        stack.extend(k for k in reversed(list(element)) if k.tag != f"{SCXML}invoke")
+    return found
+
+
 def _calls(root: Any) -> list[tuple[str, str]]:
     calls = []
-    for element in root.iter():
+    for element in _own(root):
         if element.tag in (f"{SCXML}state", f"{SCXML}parallel"):
             for onentry in element.findall(f"{SCXML}onentry"):
                 for call in onentry.findall(f"{SG}call"):

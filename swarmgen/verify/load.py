@@ -11,7 +11,7 @@ from pathlib import Path
 from swarmgen import diagnostics as dg
 from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import FinalState, Model, State
-from swarmgen.ir.query import composition, walk
+from swarmgen.ir.query import composition, sessions, walk
 from swarmgen.span import Span
 from swarmgen.verify.domains import endings
 from swarmgen.verify.kinds import make_kind
@@ -70,6 +70,10 @@ def load(
     if validation.model is None or dg.has_errors(validation.diagnostics):
         return loaded
     model = validation.model
+    if sessions(model):  # a child session's state is no part of a member's snapshot
+        raise VerifyError(
+            "the model invokes SCXML sessions (<invoke>), which the verifier does not explore"
+        )
     machines = machines_of(path, validation)  # validated once, above
     counts = _counts(composition(model), members or {}, machines.types())
     emits = {b.name: b.emits for b in model.behaviours}

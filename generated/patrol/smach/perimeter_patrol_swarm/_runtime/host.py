@@ -26,6 +26,12 @@ class Event:
     # `raise e(f = ...)` (the step bound goes on counting through it)
     kind: str = "external"
     sendid: str | None = None  # a delayed raise's send id ("" without `as`): `_event.sendid`
+    # Invoked sessions (docs/semantics.md): the invoke id of the child session that sent it
+    # (`_event.invokeid`) and that session's number, and the path of invoke ids from the
+    # member's own session to the session it is for (None: the member's own session).
+    invokeid: str | None = None
+    session: int = 0
+    to: tuple[str, ...] | None = None
 
 
 class Host(Protocol):
@@ -113,16 +119,24 @@ def event_fields(event: Event) -> Record:
     timer = name.startswith("after.")
     sendid = name if timer else (event.sendid or "")
     sent = timer or event.sendid is not None or event.kind == "raised"
+    invokeid = event.invokeid or ""
+    # an event its parent session sent to an invoked session: addressed to it, sent by no one
+    # in it (its own sends carry a send id, its raises are "raised")
+    parent = event.to is not None and not invokeid and not sent
     data: Any = event.data  # a Record, or any value a final state's done(expr) gave
     return Record(
         name=name,
         type=_TYPES.get(event.kind, "external"),
         sendid=sendid,
-        origin="#_internal" if sent else "",
-        origintype=PROCESSOR if sent else "",
-        invokeid="",
+        origin=f"#_{invokeid}" if invokeid else "#_parent" if parent else _origin(sent),
+        origintype=PROCESSOR if sent or invokeid or parent else "",
+        invokeid=invokeid,
         data=Record() if data is None or data == "" else data,  # as `$sg.meta` gives it
     )
+
+
+def _origin(sent: bool) -> str:
+    return "#_internal" if sent else ""
 
 
 def system_variable(name: str, event: Event | None, session_id: str, chart_name: str) -> Any:

@@ -31,14 +31,16 @@ from .chart import (
     record,
 )
 from .configuration import Chain, Configuration, Plan, Selection, Tables
-from .host import PROCESSOR, Event, Host, NullHost, system_variable
+from .host import Event, Host, NullHost, system_variable
 from .microstep import document_order, in_final
+from .sends import Sends
+from .sessions import Sessions
 
 __all__ = ["FINALIZE_PREFIX", "OUTCOME_PREFIX", "STEP_BOUND", "Engine", "Event", "Host", "NullHost"]
 
 
 @dataclass
-class Engine:
+class Engine(Sends):
     """One member's statechart being interpreted: its configuration, data and event queues."""
 
     chart: Chart
@@ -80,6 +82,15 @@ class Engine:
         self._bound_hit = False
         self._input: Event | None = None
         self._bounded = any(t.bounded for n in self.chart.nodes.values() for t in n.transitions)
+        # Invoked sessions (`sessions`): this engine's children, and where it sits when it is
+        # one itself (the invoke ids from the member's session, its number and its parent's).
+        invokes = any(n.invokes for n in self.chart.nodes.values())
+        self.sessions: Sessions | None = Sessions(self) if invokes else None
+        self.path: tuple[str, ...] = ()
+        self.root_host: Host = self.host
+        self.serial = 0
+        self.invokeid: str | None = None
+        self.parent_sessions: Sessions | None = None
 
     # --- public
 
@@ -90,12 +101,49 @@ class Engine:
         if root.initial is None:
             raise ValueError(f"chart {self.chart.name} has no initial state")
         self._cfg = None
+        if self.sessions is not None:  # a child may send to it before the macrostep ends
+            self._one_at_a_time(None)
+            return
         self._enter(self._configuration().plan((root.initial,), self.history))
         self._macrostep()
 
+    def _one_at_a_time(self, event: Event | None) -> None:
+        """The start (`event` None) or one event, then the events that arrived during its
+        macrostep: a host that processes what it is given at once (the ROS node) would run
+        this engine inside its own macrostep when a child it starts sends to it."""
+        sessions = self.sessions
+        assert sessions is not None
+        if sessions.stepping:
+            if event is not None:
+                sessions.waiting.append(event)
+            return
+        sessions.stepping = True
+        try:
+            initial = self.chart.root.initial
+            if event is None and initial is not None:  # `start`, which checked `initial`
+                self._enter(self._configuration().plan((initial,), self.history))
+                self._macrostep()
+            elif event is not None:
+                self._step(event)
+            while sessions.waiting and self.running:
+                self._step(sessions.waiting.popleft())
+        finally:
+            sessions.stepping = False
+            sessions.waiting.clear()
+
     def send(self, event: Event) -> None:
         """Process one external event completely (one macrostep)."""
+        if self.sessions is not None:
+            self._one_at_a_time(event)
+        else:
+            self._step(event)
+
+    def _step(self, event: Event) -> None:
         if not self.running:
+            return
+        if event.to is not None and event.to != self.path:  # for an invoked session
+            if self.sessions is not None and len(event.to) > len(self.path):
+                self.sessions.route(event, event.to)
             return
         if event.origin is not None and not self._current_activation(event.origin):
             return  # the outcome of a behaviour that was cancelled: discarded
@@ -104,6 +152,8 @@ class Engine:
         if fill is not None:  # a declared event (the value rule)
             event.data = fill(event.data)
         self.ctx.event = event
+        if self.sessions is not None and not self.sessions.received(event):
+            return  # from a session that was cancelled: discarded
         cfg = self._cfg or self._configuration()
         selection = cfg.selections.get(name) or cfg.selection(name)
         now: Configuration | None = cfg
@@ -118,6 +168,8 @@ class Engine:
             self._macrostep()
         elif self._to_invoke:
             self._start_calls()
+            if self.internal:  # an invoke that failed to start: error.execution
+                self._macrostep()
 
     def make_event(
         self, name: str, data: Mapping[str, Any] | None = None, sender: str = "", **extra: Any
@@ -162,28 +214,6 @@ class Engine:
         """`send e`: the event goes to the swarm, through the host."""
         self.host.send_swarm(self.make_event(name, data, self.member_id))
 
-    def raise_delayed(
-        self, name: str, data: Mapping[str, Any] | None, delay_ms: Any, sendid: str | None
-    ) -> None:
-        """`raise e after N ms [as id]`: the host delivers it to this member's external queue
-        after the delay (W3C: a delayed `<send>` to the session itself), as an input from
-        outside (the step bound restarts); after 0 ms at once, as `raise e(f = ...)`. A delay
-        that is no number, or is negative, is error.execution: the event is not raised."""
-        if isinstance(delay_ms, bool) or not isinstance(delay_ms, int | float) or delay_ms < 0:
-            raise ValueError(f"the delay of {name!r} is {delay_ms!r}, not a duration")
-        if sendid is None:  # a key no `as <name>` can give (a name has no dot)
-            self._sends += 1
-            key = f"send.{self._sends}"
-        else:
-            key = sendid
-        event = self.make_event(name, data, self.member_id)
-        event.sendid = sendid or ""
-        if delay_ms == 0:  # W3C 6.2.4: dispatched at once, in document order (as Qt SCXML)
-            event.kind = "raised"
-            self.host.deliver(event)
-        else:
-            self.host.start_delayed(key, event, delay_ms)
-
     def system_variable(self, name: str, event: Event | None) -> Any:
         """`_event` (its W3C fields, docs/semantics.md), `_sessionid`, `_name`, `_ioprocessors`."""
         return system_variable(name, event, self.session_id, self.chart.name)
@@ -201,64 +231,24 @@ class Engine:
         condition): error.execution, counted and reported as every other."""
         self._error(where, err)
 
-    def raise_targeted(
-        self,
-        name: str,
-        data: Mapping[str, Any] | None,
-        target: Any,
-        delay_ms: Any,
-        sendid: str | None,
-    ) -> None:
-        """`raise e to target`: `#_internal` is `raise e` (delays are for sessions); this
-        session's `#_scxml_<_sessionid>` its external queue, as a delayed raise; another
-        session's is error.communication (swarmgen reaches no other session; as every error
-        of executable content it ends the block, W3C 4.9, as in Qt SCXML); anything else is
-        no target: error.execution, the block ends."""
-        if target == "#_internal" and not delay_ms:
-            self.raise_internal(name, data)
-        elif target == f"#_scxml_{self.session_id}":
-            self.raise_delayed(name, data, delay_ms, sendid)
-        elif isinstance(target, str) and target.startswith("#_scxml_"):
-            raise CommunicationError(f"no session {target[len('#_scxml_') :]!r} to send to")
-        else:
-            raise ValueError(f"{target!r} is not a target this member can send to")
-
-    def raise_through(
-        self,
-        name: str,
-        data: Mapping[str, Any] | None,
-        options: tuple[Any, Any, str | None, Any],
-        into: str | None,
-    ) -> None:
-        """`raise e [to t] via p [after d] [into v]`, options (target, delay_ms, sendid, via):
-        W3C's `<send type|typeexpr>` (only the SCXML event processor, by its URI or
-        `"scxml"`: any other value is error.execution, nothing sent) and `idlocation` (a send
-        id made here, unique in the session, written to the datum `into` first). The error
-        event of a send that fails carries its send id (W3C 5.10.1)."""
-        target, delay_ms, sendid, via = options
-        if into is not None:
-            self._sends += 1
-            sendid = self.data[into] = f"send.{self._sends}"
-        try:
-            if via is not None and via not in (PROCESSOR, "scxml"):
-                raise ValueError(f"{via!r} is not an event I/O processor this member has")
-            if target is not None:
-                self.raise_targeted(name, data, target, delay_ms or 0, sendid)
-            elif delay_ms is not None:
-                self.raise_delayed(name, data, delay_ms, sendid)
-            else:  # `<send target="#_internal">`: the back of the external queue, as with data
-                self.raise_internal(name, data if data is not None else {})
-        except (ValueError, CommunicationError) as err:
-            err.sendid = sendid or ""  # type: ignore[union-attr]  # read by `_error`
-            raise
-
-    def cancel_delayed(self, sendid: str) -> None:
-        """`cancel id`: the host drops the pending delayed events raised as `id`."""
-        self.host.cancel_delayed(sendid)
+    def run_finalize(self, action: Callable[[Context], None], node: Node) -> None:
+        """An invoke's `<finalize>`, on the event from its session being processed."""
+        self._run(action, "finalize in", node)
 
     # --- the algorithm
 
     def _macrostep(self) -> None:
+        """Microsteps until nothing is enabled, then the behaviours and invokes of the states
+        entered start; an error that raised starts another round (W3C mainEventLoop)."""
+        while True:
+            self._settle()
+            if not self._to_invoke:
+                return
+            self._start_calls()
+            if not self.internal or not self.running:
+                return
+
+    def _settle(self) -> None:
         internal = self.internal
         while self.running:
             cfg = self._cfg or self._configuration()
@@ -276,8 +266,6 @@ class Engine:
                 enabled = self._choose(selection) if static is None or self._bounded else static
             if enabled:
                 self._microstep(enabled, cfg)
-        if self._to_invoke:
-            self._start_calls()
 
     def _start_calls(self) -> None:
         invoke = self._to_invoke
@@ -294,6 +282,8 @@ class Engine:
                 except Exception as err:
                     args = self._unusable_arguments(node, err)
                 host.start_call(node, call, args if isinstance(args, dict) else {}, activation)
+            if node.invokes and node in config and self.sessions is not None:
+                self.sessions.start(node)
         invoke.clear()
 
     def _unusable_arguments(self, node: Node, err: Exception) -> dict[str, Any]:
@@ -394,7 +384,7 @@ class Engine:
                 config.difference_update(exits)
             else:
                 for state in exits:
-                    if state.call is not None or state.timers or state.onexit is not None:
+                    if state.call or state.timers or state.onexit or state.invokes:
                         self._leave(state)
                     config.discard(state)
         for action, source in plan.actions:  # `_run`'s, inlined (one per transition taken)
@@ -422,6 +412,8 @@ class Engine:
             self.host.cancel_timer(state, event)
         if state.onexit is not None:
             self._run(state.onexit, "exit of", state)
+        if state.invokes and self.sessions is not None:  # W3C: after the exit actions
+            self.sessions.cancel(state)
 
     def _enter(self, plan: Plan) -> None:
         """Enter the plan's entry set in document order; the configuration is then its target."""
@@ -434,7 +426,7 @@ class Engine:
             return
         for state, initial, default in plan.entries:
             config.add(state)
-            if state.call is not None:  # only these start a behaviour (`_start_calls`)
+            if state.call is not None or state.invokes:  # started by `_start_calls`
                 self._to_invoke.add(state)
             if state.onentry is not None:
                 self._run(state.onentry, "entry of", state)
@@ -451,9 +443,13 @@ class Engine:
     def _reached_final(self, state: Node) -> None:
         parent = state.parent
         if parent is None or parent.kind == "scxml":
+            done = self.parent_sessions  # an invoked session's done data is its parent's
+            data = self._done_data(state) if done and state.donedata is not None else None
             self.running = False
             self.finished = True
             self._exit_everything()
+            if done is not None:
+                done.done(self, data)
             return
         data = self._done_data(state) if state.donedata is not None else None
         self.internal.append(self.make_event(f"done.state.{parent.id}", data, kind="platform"))

@@ -202,7 +202,7 @@ def cancels(exits: Iterable[Node]) -> tuple[Node, ...] | None:
     cancel, in exit order (None: an exit action runs)."""
     found = []
     for state in exits:
-        if state.onexit is not None:
+        if state.onexit is not None or state.invokes:  # (an invoke is cancelled by `_leave`)
             return None
         if state.call is not None or state.timers:
             found.append(state)
@@ -220,6 +220,7 @@ def entered_quietly(entries: Iterable[Entry]) -> Quiet:
     for state, initial, default in entries:
         if (
             state.onentry is not None
+            or state.invokes
             or state.timers
             or state.kind == "final"
             or initial is not None

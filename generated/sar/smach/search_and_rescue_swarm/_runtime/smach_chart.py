@@ -62,6 +62,7 @@ class _Compiler:
             call=behaviour.call(entry.remapping) if behaviour is not None else None,
             timers=state.timers,
             donedata=state.donedata,
+            invokes=state.invokes,
             history=("deep" if state.deep else "shallow")
             if isinstance(state, HistoryState)
             else "",
