@@ -41,6 +41,7 @@ CONFIGS = [
     ("sar", 2, 2, True, False, False),
     ("sar", 2, 0, True, True, False), ("sar", 2, 0, False, True, False),
     ("sar", 3, 0, True, True, False), ("sar", 3, 0, False, True, False),
+    ("sar", 4, 0, True, True, False), ("sar", 4, 0, False, True, False),
     ("sar", 3, 3, True, True, False),
     ("sar", 3, 3, False, True, True),
     ("sar", 4, 4, True, True, True),
@@ -49,7 +50,7 @@ CONFIGS = [
 
 
 # configurations whose full space needs more than the default budget: their own budget
-BUDGETS = {("sar", 3, 3, True, True): 3_000_000}
+BUDGETS = {("sar", 3, 3, True, True): 3_000_000, ("sar", 4, 0, False, True): 8_000_000}
 
 
 def takeoff_model(directory: Path) -> Path:

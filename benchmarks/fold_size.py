@@ -10,9 +10,10 @@ states a folded search would store, the steps it would still compute, and the ti
 of the search itself (the properties' bookkeeping left out), for compositions the unfolded
 search cannot finish.
 
-    .venv/bin/python benchmarks/fold_size.py UAVS UGVS [--max-states N] [--no-symmetry]
+    .venv/bin/python benchmarks/fold_size.py UAVS UGVS [--max-states N] [--no-symmetry] [--unfolded]
 
-Prints one JSON line. Without symmetry and with the same budget, the stored states equal the
+Prints one JSON line. `--unfolded` runs the verifier's search (`explore`, no property
+observer) on the same composition instead, for a same-run comparison of the search alone. Without symmetry and with the same budget, the stored states equal the
 unfolded search's states minus its `expanded_by_ample_set` (every state an ample set expands is
 folded away, every other one stored): `bench_verify.py`'s rows check it.
 """
@@ -32,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 
 from swarmgen.verify.ample import ample  # noqa: E402
 from swarmgen.verify.decouple import decoupled  # noqa: E402
+from swarmgen.verify.explore import Budget, explore  # noqa: E402
 from swarmgen.verify.load import load  # noqa: E402
 from swarmgen.verify.system import SwarmState, System, canonical_state  # noqa: E402
 
@@ -88,15 +90,23 @@ def main() -> None:
     parser.add_argument("ugvs", type=int)
     parser.add_argument("--max-states", type=int, default=20_000_000)
     parser.add_argument("--no-symmetry", action="store_true")
+    parser.add_argument("--unfolded", action="store_true", help="the verifier's search instead")
     args = parser.parse_args()
     loaded = load(SAR, {"UAV": args.uavs, "UGV": args.ugvs}, ())
     assert loaded.system is not None
     started = time.perf_counter()
-    row = folded(loaded.system, args.max_states, not args.no_symmetry)
+    if args.unfolded:
+        budget = Budget(max_states=args.max_states, symmetry=not args.no_symmetry)
+        search = explore(loaded.system, budget)
+        row = {"stored": search.states, "expanded_by_ample_set": search.reduced}
+        row |= {"depth": search.max_depth, "bounded": search.bounded}
+    else:
+        row = folded(loaded.system, args.max_states, not args.no_symmetry)
     seconds = time.perf_counter() - started
     members = {"UAV": args.uavs, "UGV": args.ugvs}
     peak = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)
-    result = {"members": members, "symmetry": not args.no_symmetry, **row}
+    result = {"members": members, "symmetry": not args.no_symmetry, "folded": not args.unfolded}
+    result |= row
     print(json.dumps({**result, "seconds": round(seconds, 2), "peak_rss_mb": peak}))
 
 
