@@ -41,6 +41,7 @@ CONFIGS = [
     ("sar", 2, 2, True, False, False),
     ("sar", 2, 0, True, True, False), ("sar", 2, 0, False, True, False),
     ("sar", 3, 0, True, True, False), ("sar", 3, 0, False, True, False),
+    ("sar", 4, 0, True, True, False), ("sar", 4, 0, False, True, False),
     ("sar", 3, 3, True, True, False),
     ("sar", 3, 3, False, True, True),
     ("sar", 4, 4, True, True, True),
@@ -49,7 +50,7 @@ CONFIGS = [
 
 
 # configurations whose full space needs more than the default budget: their own budget
-BUDGETS = {("sar", 3, 3, True, True): 3_000_000}
+BUDGETS = {("sar", 3, 3, True, True): 3_000_000, ("sar", 4, 0, False, True): 8_000_000}
 
 
 def takeoff_model(directory: Path) -> Path:
@@ -89,17 +90,69 @@ def one(
     }
 
 
+# issue 17's speed goal: (UAVs, UGVs, budget of states)
+SPEED_CONFIGS = [(2, 2, 1_500_000), (3, 3, 3_000_000), (4, 4, 1_500_000)]
+SPEED_RESULTS = ROOT / "benchmarks" / "results" / "verify_speed.json"
+
+
+def run_one(code: Path, uavs: int, ugvs: int, budget: int) -> dict[str, Any]:
+    """One SAR configuration in a child process, on the code under `code` (that checkout's
+    own copy of this script, which puts its `swarmgen` first on the path)."""
+    script = code / "benchmarks" / "bench_verify.py"
+    model = code / "sample_models" / "sar" / "sar.xmi"  # the script knows SAR by its path
+    command = [sys.executable, str(script), "--one", str(model), str(uavs), str(ugvs), "1", "1"]
+    command.append(str(budget))
+    environment = {**os.environ, "PYTHONPATH": str(code)}
+    started = time.perf_counter()
+    done = subprocess.run(command, check=True, capture_output=True, text=True, env=environment)
+    row: dict[str, Any] = json.loads(done.stdout)
+    row["process_seconds"] = round(time.perf_counter() - started, 2)
+    row["load_average_after"] = [round(x, 2) for x in os.getloadavg()]
+    return row
+
+
+def compare(baseline: Path) -> None:
+    """The speed goal's configurations on the baseline code and on this code, alternately
+    (the machine is shared: compare the ratios of one run)."""
+    rows = []
+    for uavs, ugvs, budget in SPEED_CONFIGS:
+        pair: dict[str, Any] = {"members": {"UAV": uavs, "UGV": ugvs}, "max_states": budget}
+        for name, code in (("baseline", baseline), ("this", ROOT)):
+            pair[name] = run_one(code, uavs, ugvs, budget)
+            print(name, json.dumps(pair[name]), flush=True)
+        for field in ("seconds", "process_seconds", "peak_rss_mb"):
+            pair[f"{field}_ratio"] = round(pair["baseline"][field] / pair["this"][field], 2)
+        rows.append(pair)
+    payload = {
+        "command": f"benchmarks/bench_verify.py --baseline {baseline}",
+        "python": platform.python_version(),
+        "cpus": os.cpu_count(),
+        "load_average": os.getloadavg(),
+        "results": rows,
+    }
+    SPEED_RESULTS.write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
+
+
 def main() -> None:
     """Run every configuration in a child process and write the results."""
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--max-states", type=int, default=1_500_000)
     parser.add_argument("--quick", action="store_true", help="leave out the bounded runs")
     parser.add_argument("--one", nargs=6, metavar=("MODEL", "UAVS", "UGVS", "SYM", "POR", "N"))
+    parser.add_argument(
+        "--baseline",
+        type=Path,
+        help="a checkout of the code before a change: run SPEED_CONFIGS with it and with this "
+        "code, alternately, and write benchmarks/results/verify_speed.json",
+    )
     args = parser.parse_args()
     if args.one:
         model, uavs, ugvs, sym, por, budget = args.one
         row = one(Path(model), int(uavs), int(ugvs), sym == "1", por == "1", int(budget))
         print(json.dumps(row))
+        return
+    if args.baseline is not None:
+        compare(args.baseline.resolve())
         return
     rows = []
     with tempfile.TemporaryDirectory() as scratch:

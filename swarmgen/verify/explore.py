@@ -64,6 +64,7 @@ class Search:
     locals_read: set[int] = field(default_factory=set)  # member values whose graphs were read
     lost: dict[str, tuple[int, Step]] = field(default_factory=dict)  # event -> first edge losing it
     symmetry: bool = True  # states were merged up to symmetry (the budget's choice)
+    observed: set[int] = field(default_factory=set)  # member values whose states are entered
 
     @property
     def states(self) -> int:
@@ -132,18 +133,17 @@ def explore(
             continue
         if state.aborted and budget.decouple and _decoupled(system, search, number, state):
             continue
-        steps = system.steps(state)
         reduced = ample(system, state, visible) if budget.por else None
-        taken = reduced or steps
+        taken = reduced or system.steps(state)
         successors = _expand(system, search, frontier, number, state, budget, taken, observer)
         if reduced is not None and _may_close_cycle(search, number, successors):
-            rest = [s for s in steps if s not in reduced]
+            rest = [s for s in system.steps(state) if s not in reduced]
             successors += _expand(system, search, frontier, number, state, budget, rest, observer)
             taken, reduced = reduced + rest, None
         search.expanded += 1
         search.reduced += reduced is not None
         if observer is not None:
-            observer.edges(number, steps, successors, taken)
+            observer.edges(number, state, successors, taken)
         if state.aborted:
             search.aborted[number] = [n for n, _ in successors]
     if progress is not None:
@@ -162,28 +162,31 @@ def _expand(
     observer: Observer | None = None,
 ) -> list[tuple[int, Effect]]:
     """Discover the successors of one state by `steps`: their numbers and the effects."""
-    seen = search.seen
+    seen, parent, depth, weight = search.seen, search.parent, search.depth, search.weight
+    deeper = depth[number] + 1
+    symmetry = budget.symmetry
     successors: list[tuple[int, Effect]] = []
     for step in steps:
         after, effect = system.apply(state, step)
         if effect.changed and effect.source not in ("", "station"):
             search.received.add(effect.event)
-        search.sent.update(effect.sent)
+        if effect.sent:
+            search.sent.update(effect.sent)
         for name in effect.lost:
             search.lost.setdefault(name, (number, step))
         if effect.entered:
             kind = system.kinds[system.types[effect.member]].name
             search.entered.setdefault(kind, set()).update(effect.entered)
-        key = _key(system, after, budget)
-        code = digest(key)
+        key = canonical_state(system, after) if symmetry else after
+        code = key.key()
         known = seen.get(code)
         if known is None:
-            known = search.states
+            known = len(parent)
             seen[code] = known
-            search.parent.append(number)
+            parent.append(number)
             search.step.append(step)
-            search.depth.append(search.depth[number] + 1)
-            search.weight.append(system.weight(key))
+            depth.append(deeper)
+            weight.append(system.weight(key))
             frontier.append((known, key))
             if observer is not None:
                 observer.discovered(known, key)
@@ -229,10 +232,14 @@ def _decoupled(system: System, search: Search, number: int, state: SwarmState) -
 
 
 def _observe(system: System, search: Search, number: int, state: SwarmState) -> None:
-    """Record what the properties read of a state about to be expanded."""
-    for index in range(len(state.members)):
-        kind = system.kinds[system.types[index]].name
-        search.entered.setdefault(kind, set()).update(system.engine(state, index).config)
+    """Record what the properties read of a state about to be expanded (the states a member
+    value is in: once per value)."""
+    observed = search.observed
+    for value in state.members:
+        if value not in observed:
+            observed.add(value)
+            kind = system.kinds[system.value_type[value]].name
+            search.entered.setdefault(kind, set()).update(system.values[value].engine.config)
     if system.finished(state):
         search.finished.add(number)
         return

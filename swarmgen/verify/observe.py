@@ -92,6 +92,8 @@ class Observer:
         self._step_ids: dict[Step, int] = {}
         self._sets: dict[frozenset[int], int] = {}
         self._watched = {a.member for a in self.atoms if not isinstance(a, Occurs | Bool)}
+        self._value_labels: dict[int, frozenset[int]] = {}  # member value -> its steps' labels
+        self._safety_props = sum(p.tree.kind in ("always", "never") for p in self.props)
 
     # --- the search's hooks -------------------------------------------------------------
 
@@ -117,23 +119,45 @@ class Observer:
     def edges(
         self,
         number: int,
-        steps: Sequence[Step],
+        state: SwarmState,
         successors: Sequence[tuple[int, Effect]],
         taken: Sequence[Step],
     ) -> None:
-        """An expanded state: its enabled steps, and its successors by the steps taken."""
+        """An expanded state: its enabled steps' labels, and its successors by the steps
+        taken."""
         graph = self.graph
         if self.record:
-            labels = frozenset(self.label(s) for s in steps) - {-1}
-            graph.enabled[number] = self._set(labels)
+            graph.enabled[number] = self._set(self.enabled_labels(state))
             graph.start[number] = (len(graph.target), len(graph.target) + len(successors))
+            targets, step_ids, events = graph.target, graph.step, graph.events
+            for step, (target, effect) in zip(taken, successors, strict=True):
+                targets.append(target)
+                step_ids.append(self._step(step))
+                events.append(_events(effect))
+        if len(self.safety) == self._safety_props:
+            return  # every safety property is already decided (or there is none)
         for step, (target, effect) in zip(taken, successors, strict=True):
-            events = _events(effect)
-            if self.record:
-                graph.target.append(target)
-                graph.step.append(self._step(step))
-                graph.events.append(events)
-            self._check_safety(number, step, (self.bits[target], events), target)
+            self._check_safety(number, step, (self.bits[target], _events(effect)), target)
+
+    def enabled_labels(self, state: SwarmState) -> frozenset[int]:
+        """The fairness labels of every step enabled in `state` (the station's abort aside):
+        each member value's labels are computed once (a label names the member's type, not
+        its position), the station's from the events it may still send."""
+        memo, system = self._value_labels, self.system
+        found: set[int] = set()
+        for value in state.members:
+            labels = memo.get(value)
+            if labels is None:
+                kind = system.value_type[value]
+                labels = memo[value] = frozenset(
+                    self._labelled((kind, s.kind, s.event, s.state, s.data))
+                    for s in system.local_steps(value)
+                )
+            found |= labels
+        for event in system.station_events(state):
+            if event not in system.abort:
+                found.add(self._labelled(("station", event)))
+        return frozenset(found)
 
     # --- evaluation -----------------------------------------------------------------------
 
@@ -201,9 +225,11 @@ class Observer:
 
     def _label(self, step: Step) -> int:
         if step.kind == "station":
-            key: tuple[Any, ...] = ("station", step.event)
-        else:
-            key = (self.system.types[step.member], step.kind, step.event, step.state, step.data)
+            return self._labelled(("station", step.event))
+        member_type = self.system.types[step.member]
+        return self._labelled((member_type, step.kind, step.event, step.state, step.data))
+
+    def _labelled(self, key: tuple[Any, ...]) -> int:
         known = self.graph.labels.get(key)
         if known is None:
             known = self.graph.labels[key] = len(self.graph.labels)

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 from array import array
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from swarmgen.verify.kinds import MemberKind
@@ -84,6 +84,15 @@ class Step:
     event: str = ""
     state: str = ""
     data: Frozen = None
+    # the hash, computed once: steps key the search's memos, and data may be deep
+    _hash: int = field(init=False, repr=False, compare=False, default=0)
+
+    def __post_init__(self) -> None:
+        key = (self.kind, self.member, self.event, self.state, self.data)
+        object.__setattr__(self, "_hash", hash(key))
+
+    def __hash__(self) -> int:
+        return self._hash
 
 
 @dataclass(frozen=True, slots=True)
@@ -143,6 +152,7 @@ class System:
         self.station_bound = station_bound
         self.values: list[MemberState] = []  # interned member values: id -> value
         self.value_type: list[int] = []
+        self.inbox_length: list[int] = []  # interned value id -> its inbox's length
         self._ids: dict[tuple[int, MemberState], int] = {}
         self._runs: dict[tuple[Any, ...], Any] = {}
         self._moves: dict[tuple[Any, ...], Move] = {}
@@ -173,6 +183,7 @@ class System:
             known = self._ids[key] = len(self.values)
             self.values.append(member)
             self.value_type.append(kind)
+            self.inbox_length.append(len(member.inbox))
         return known
 
     def hears(self, value: int) -> bool:
@@ -185,8 +196,7 @@ class System:
     def weight(self, state: SwarmState) -> int:
         """The events in flight in `state` (every inbox's length): ample steps never raise it
         (the cycle proviso, `explore`)."""
-        values = self.values
-        return sum(len(values[v].inbox) for v in state.members)
+        return sum(map(self.inbox_length.__getitem__, state.members))
 
     def member(self, state: SwarmState, index: int) -> MemberState:
         """The value of the member at `index` of `state`."""
