@@ -457,6 +457,8 @@ def _format_lines(
 ) -> str:
     """format_source over lines that begin statements or are copied (`quick_line`), the
     others tokenized statement by statement."""
+    from swarmgen.backends.pyassign import layout_line  # it reads with this module's helpers
+
     i, count = 0, len(lines)
     items: list[Logical | str] = []
     while i < count:
@@ -474,6 +476,11 @@ def _format_lines(
         quick = quick_line(line)
         if quick is not None:
             entries.append(Entry((len(quick) - len(code)) // 4, [quick], code))
+            i += 1
+            continue
+        split = layout_line(line) if len(line) > LINE_LENGTH else None
+        if split is not None:  # a long literal or call, read back into `pylayout`'s nodes
+            entries.append(Entry((len(line) - len(code)) // 4, split, code))
             i += 1
             continue
         statement = one_line_statement(line)
