@@ -33,7 +33,8 @@ _KEYWORD = re.compile(rf"{_NAME}=(?!=)")
 _KEY = re.compile(r"@+: ")  # a dict entry whose key is a string (strings masked as `@`)
 _CALLEE = re.compile(rf"{_NAME}(?:\.{_NAME})?\(")
 _OPENERS = {"(": ")", "[": "]", "{": "}"}
-_CLOSERS = frozenset(")]}")
+_OPENING = re.compile(r"[(\[{]")
+_PUNCTUATION = re.compile(r"[()\[\]{},]")
 _TRAILING = frozenset((", )", ", ]", ", }"))
 
 
@@ -61,7 +62,7 @@ def layout_line(line: str) -> list[str] | None:
     code = "@".join(pieces[::2])[len(prefix) :]  # the value's code, each string one `@`
     if not pylayout.plain_shape(code):
         return None
-    node = _node(body[len(prefix) :], masked[len(prefix) :])
+    node = _Reader(body, masked).node(len(prefix), len(body))
     if not isinstance(node, Call | Seq) or (trailing and not _several(node)):
         return None
     if not prefix:
@@ -105,74 +106,67 @@ def _annotation(text: str, at: int = 0) -> int:
         at += 2
 
 
-def _node(text: str, masked: str) -> Node | None:
-    """The node of one element's text (`masked`: its strings as `@`), None if not read here."""
-    if not any(c in _OPENERS for c in masked):
-        return text  # an atom: a literal or a name
-    call = _CALLEE.match(masked)
-    opening = call.end() - 1 if call is not None else 0
-    if masked[opening] not in _OPENERS or _closing(masked, opening) != len(masked) - 1:
-        return text if _closing_all(masked) else None  # brackets inside an atom (`x[0]`)
-    items = _items(text[opening + 1 : -1], masked[opening + 1 : -1])
-    if call is not None:
-        callee = text[:opening]
-        if items is None or keyword.iskeyword(callee.split(".")[0]):
-            return None
-        return Call(callee, tuple(items))
-    if masked[0] == "(":  # a tuple of several elements, else an atom (`(x,)`, `()`)
-        return Seq("(", tuple(items)) if items is not None and len(items) > 1 else text
-    return None if items is None else Seq(masked[0], tuple(items))
+class _Reader:
+    """The nodes of a statement's text, read with its brackets matched once (`masked`: the
+    text with each string's characters as `@`; its brackets balance)."""
 
+    def __init__(self, text: str, masked: str) -> None:
+        self.text, self.masked = text, masked
+        self.closing: dict[int, int] = {}  # opening bracket -> its closing bracket
+        self.commas: dict[int, list[int]] = {-1: []}  # opening bracket -> its commas
+        stack = [-1]
+        for found in _PUNCTUATION.finditer(masked):
+            at, char = found.start(), found.group()
+            if char == ",":
+                self.commas[stack[-1]].append(at)
+            elif char in _OPENERS:
+                stack.append(at)
+                self.commas[at] = []
+            else:
+                self.closing[stack.pop()] = at
 
-def _items(text: str, masked: str) -> list[Kw | Node] | None:
-    """The elements between a pair of brackets; None for a trailing comma or an unread one."""
-    if not text:
-        return []
-    items: list[Kw | Node] = []
-    start = depth = 0
-    for i, char in enumerate(masked + ","):
-        if char in _OPENERS:
-            depth += 1
-        elif char in _CLOSERS:
-            depth -= 1
-        elif char == "," and depth == 0:
-            item = _element(text[start:i], masked[start:i])
+    def node(self, start: int, end: int) -> Node | None:
+        """The node of the element `text[start:end]`, None if not read here."""
+        masked = self.masked
+        if _OPENING.search(masked, start, end) is None:
+            return self.text[start:end]  # an atom: a literal or a name
+        call = _CALLEE.match(masked, start, end)
+        opening = call.end() - 1 if call is not None else start
+        if masked[opening] not in _OPENERS or self.closing[opening] != end - 1:
+            return self.text[start:end]  # brackets inside an atom (`x[0]`, `f(x).y`)
+        items = self._items(opening)
+        if call is not None:
+            callee = self.text[start:opening]
+            if items is None or keyword.iskeyword(callee.split(".")[0]):
+                return None
+            return Call(callee, tuple(items))
+        if masked[opening] == "(" and (items is None or len(items) < 2):
+            return self.text[start:end]  # a tuple of one or none (`(x,)`, `()`): an atom
+        return None if items is None else Seq(masked[opening], tuple(items))
+
+    def _items(self, opening: int) -> list[Kw | Node] | None:
+        """The elements inside a bracket; None for a trailing comma or an element not read."""
+        close = self.closing[opening]
+        if close == opening + 1:
+            return []
+        items: list[Kw | Node] = []
+        start = opening + 1
+        for comma in [*self.commas[opening], close]:
+            item = self._element(start, comma)
             if item is None:
                 return None
             items.append(item)
-            start = i + 2  # `, ` (the plain shape has one space after a comma)
-    return items
+            start = comma + 2  # `, ` (the plain shape has one space after a comma)
+        return items
 
-
-def _element(text: str, masked: str) -> Kw | Node | None:
-    if not text:
-        return None  # a trailing comma: magic to black
-    for prefix in (_KEYWORD.match(masked), _KEY.match(masked)):
-        if prefix is not None:
-            value = _node(text[prefix.end() :], masked[prefix.end() :])
-            return None if value is None else Kw(text[: prefix.end()], value)
-    return _node(text, masked)
-
-
-def _closing(masked: str, opening: int) -> int:
-    """The index of the bracket that closes the one at `opening`."""
-    depth = 0
-    for i in range(opening, len(masked)):
-        if masked[i] in _OPENERS:
-            depth += 1
-        elif masked[i] in _CLOSERS:
-            depth -= 1
-            if depth == 0:
-                return i
-    return -1
-
-
-def _closing_all(masked: str) -> bool:
-    """Every bracket of `masked` is closed within it (an atom is one element)."""
-    depth = 0
-    for char in masked:
-        depth += char in _OPENERS
-        depth -= char in _CLOSERS
-        if depth < 0:
-            return False
-    return depth == 0
+    def _element(self, start: int, end: int) -> Kw | Node | None:
+        if start >= end:
+            return None  # a trailing comma: magic to black
+        for prefix in (
+            _KEYWORD.match(self.masked, start, end),
+            _KEY.match(self.masked, start, end),
+        ):
+            if prefix is not None:
+                value = self.node(prefix.end(), end)
+                return None if value is None else Kw(self.text[start : prefix.end()], value)
+        return self.node(start, end)
