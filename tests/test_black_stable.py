@@ -192,3 +192,16 @@ def test_long_assignments_print_what_black_prints(
     expected = black.format_str(source, mode=black_mode())
     assert blocks + "\n".join(lines) + "\n" == expected
     assert pyformat.format_source(source, pyrender.black_statement) == expected
+
+
+@settings(max_examples=300, deadline=None)
+@given(text=st.text(st.characters(min_codepoint=32, max_codepoint=126), max_size=90))
+def test_one_line_docstrings_copied_as_black_prints_them(text: str) -> None:
+    line = f'    """{text}"""'
+    copied = pyformat.quick_line(line)
+    if copied is None:  # quotes, a backslash or a space at an end: the tokenized path
+        event("tokenized")
+        return
+    event("copied")
+    source = f"def f():\n{line}\n"
+    assert "def f():\n" + copied + "\n" == black.format_str(source, mode=black_mode())
