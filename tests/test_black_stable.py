@@ -10,7 +10,7 @@ from pathlib import Path
 
 import black
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from swarmgen import pipeline
@@ -173,8 +173,22 @@ _TARGETS = st.one_of(
 )
 
 
+_CALLEE = "_0000000._00000000000000"
+# fits in 100 columns only without its trailing comma, which black then reads as magic
+_MAGIC = pylayout.Seq(
+    "(",
+    (
+        pylayout.Call(_CALLEE, ("-1000",)),
+        pylayout.Call(
+            _CALLEE, (pylayout.Kw("_0000=", "'XXXXXX'"), pylayout.Kw("_0000000=", "'XXXX'"))
+        ),
+    ),
+)
+
+
 @settings(max_examples=300, deadline=None)
 @given(target=_TARGETS, value=_VALUES, depth=st.integers(0, 3), trailing=st.booleans())
+@example(target="return ", value=_MAGIC, depth=0, trailing=True)
 def test_long_assignments_print_what_black_prints(
     target: str, value: pylayout.Node, depth: int, trailing: bool
 ) -> None:

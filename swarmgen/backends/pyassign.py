@@ -48,12 +48,14 @@ def layout_line(line: str) -> list[str] | None:
     pieces = pyformat.plain_pieces(body)
     if pieces is None:
         return None
-    # a trailing comma after the last of several elements of the value (black explodes that
-    # bracket whether or not the comma is there: it ends a line too long to keep)
+    # a trailing comma after the last of several elements of the value: black explodes that
+    # bracket whether or not the comma is there when the line without it is still too long
     trailing = pieces[-1][-3:] in _TRAILING
     if trailing:
         pieces[-1] = pieces[-1][:-3] + pieces[-1][-1]
         body = body[:-3] + body[-1]
+        if indent + len(body) <= pylayout.LINE_LENGTH:
+            return None  # it would fit: the magic comma alone explodes it
     masked = "".join(p if i % 2 == 0 else "@" * len(p) for i, p in enumerate(pieces))
     head = _TARGET.match(masked)
     prefix = head.group(1) if head is not None else ""
