@@ -9,7 +9,7 @@ STUDY_STAMP := $(VENV)/.study-installed
 SAMPLES := $(sort $(wildcard sample_models/*/*.xmi))
 SYSTEM_PYTHON := /usr/bin/python3
 
-.PHONY: study demo test lint typecheck typecheck-bare pytest generated check-generated golden schema sysdeps ros bench bench-ros clean
+.PHONY: study demo test lint typecheck typecheck-bare pytest generated check-generated golden schema templates sysdeps ros bench bench-ros clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -94,6 +94,10 @@ golden: $(STAMP)
 
 schema: $(STAMP)
 	$(BIN)/swarmgen schema -o schemas
+
+## templates: recompile swarmgen/_templates/ (the shipped templates as Python, swarmgen/precompiled.py)
+templates: $(STAMP)
+	$(BIN)/python -m swarmgen.precompiled
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_compile.py

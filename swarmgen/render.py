@@ -15,6 +15,7 @@ from typing import Any
 
 import jinja2
 
+from swarmgen.precompiled import ShippedLoader
 from swarmgen.resources import data_dir
 
 # The override of the compile being run. A context variable, not a parameter, so that the
@@ -25,7 +26,8 @@ _OVERRIDE: ContextVar[Path | None] = ContextVar("swarmgen_templates", default=No
 @lru_cache(maxsize=8)
 def environment(override: Path | None = None) -> jinja2.Environment:
     """The Jinja2 environment of the shipped templates, with `override`'s first if given."""
-    loader: jinja2.BaseLoader = jinja2.FileSystemLoader(str(data_dir("templates")))
+    # the shipped templates through their compiled modules (swarmgen/precompiled.py)
+    loader: jinja2.BaseLoader = ShippedLoader(str(data_dir("templates")))
     if override is not None:
         loader = jinja2.ChoiceLoader([jinja2.FileSystemLoader(str(override)), loader])
     return jinja2.Environment(

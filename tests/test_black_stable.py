@@ -10,11 +10,11 @@ from pathlib import Path
 
 import black
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from swarmgen import pipeline
-from swarmgen.backends import pyformat, pylayout, pyrender
+from swarmgen.backends import pyassign, pyformat, pylayout, pyrender
 from swarmgen.backends.pyrender import black_mode
 from tests.conftest import ROOT
 from tests.modelkit import ModelKit
@@ -103,6 +103,7 @@ _ATOMS = st.one_of(
     st.lists(_WORDS, max_size=4).map(lambda items: repr(tuple(items))),
     st.lists(_WORDS, max_size=3).map(repr),
     st.booleans().map(repr),
+    st.text("abc d", min_size=50, max_size=110).map(repr),  # one token too long to fit
 )
 
 
@@ -148,3 +149,73 @@ def test_layout_prints_what_black_prints(call: pylayout.Call, depth: int) -> Non
     assert laid == expected
     assert pyformat.format_source(laid, pyrender.black_statement) == expected
     assert pyformat.format_source(laid, pyrender.black_statement, quick=False) == expected
+
+
+# --- pyassign: long one-line assignments and returns read back into nodes, against black
+
+_TUPLES = st.builds(lambda a: pylayout.Seq("(", tuple(a)), st.lists(_NODES, min_size=2, max_size=5))
+_VALUES = st.one_of(_CALLS, _TUPLES, _NODES.filter(lambda n: not isinstance(n, str)))
+_TARGETS = st.one_of(
+    st.just("return "),
+    st.builds(
+        lambda name, annotation: f"{name}{annotation} = ",
+        st.lists(_NAMES, min_size=1, max_size=2).map(".".join),
+        st.sampled_from(
+            [
+                "",
+                ": int",
+                ": dict[str, Any]",
+                ": tuple[Parameter, ...]",
+                ": dict[str, tuple[str, x.Y]]",
+            ]
+        ),
+    ),
+)
+
+
+_CALLEE = "_0000000._00000000000000"
+# fits in 100 columns only without its trailing comma, which black then reads as magic
+_MAGIC = pylayout.Seq(
+    "(",
+    (
+        pylayout.Call(_CALLEE, ("-1000",)),
+        pylayout.Call(
+            _CALLEE, (pylayout.Kw("_0000=", "'XXXXXX'"), pylayout.Kw("_0000000=", "'XXXX'"))
+        ),
+    ),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(target=_TARGETS, value=_VALUES, depth=st.integers(0, 3), trailing=st.booleans())
+@example(target="return ", value=_MAGIC, depth=0, trailing=True)
+def test_long_assignments_print_what_black_prints(
+    target: str, value: pylayout.Node, depth: int, trailing: bool
+) -> None:
+    blocks = "".join(f"{'    ' * level}if x:\n" for level in range(depth))
+    text = pylayout.flat(value)
+    if trailing and isinstance(value, pylayout.Seq) and value.items:
+        text = text[:-1] + ", " + text[-1]  # as the templates print PARAMETERS
+    line = "    " * depth + target + text
+    source = blocks + line + "\n"
+    lines = pyassign.layout_line(line)
+    if lines is None:  # short, or a form not read (pyformat's tokenized path prints it)
+        event("not laid out" if len(line) > pylayout.LINE_LENGTH else "fits")
+        return
+    event(f"{min(len(lines), 6)} lines")
+    expected = black.format_str(source, mode=black_mode())
+    assert blocks + "\n".join(lines) + "\n" == expected
+    assert pyformat.format_source(source, pyrender.black_statement) == expected
+
+
+@settings(max_examples=300, deadline=None)
+@given(text=st.text(st.characters(min_codepoint=32, max_codepoint=126), max_size=90))
+def test_one_line_docstrings_copied_as_black_prints_them(text: str) -> None:
+    line = f'    """{text}"""'
+    copied = pyformat.quick_line(line)
+    if copied is None:  # quotes, a backslash or a space at an end: the tokenized path
+        event("tokenized")
+        return
+    event("copied")
+    source = f"def f():\n{line}\n"
+    assert "def f():\n" + copied + "\n" == black.format_str(source, mode=black_mode())

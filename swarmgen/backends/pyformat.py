@@ -134,6 +134,8 @@ _STRINGS = re.compile(r"""('[^'"]*'|"[^"]*")""")
 # told apart here), optional parentheses after `=` or `return`.
 _SLOW_FORMS = re.compile(r"[(\[{][ ,]| [)\]},]|,[\]}]|=\s*\(|return\s*\(")
 _PUNCTUATION = re.compile(r",\)|[()\[\]{},]")
+# `"""text"""` alone on its line, the text printable with no quote, backslash or space at its ends
+_ONE_LINE_DOCSTRING = re.compile(r'(?:    )*"""[!#-\[\]-~](?:[ !#-\[\]-~]*[!#-\[\]-~])?"""')
 _NAME_CHARS = frozenset("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_")
 
 
@@ -190,6 +192,8 @@ def quick_line(line: str) -> str | None:
     Memoised (in this process, bounded): the helper functions' lines are asked for when they
     are laid out and again when each module that prints them is formatted, and the smach and
     asyncio members print the same bodies."""
+    if len(line) <= LINE_LENGTH and _ONE_LINE_DOCSTRING.fullmatch(line) and line.isascii():
+        return line  # black's docstring rules keep it: no space, quote or escape to adjust
     plain = _plain(line) if len(line) <= LINE_LENGTH else None
     if plain is None:
         return None
@@ -242,7 +246,8 @@ def one_line_statement(line: str) -> Logical | None:
     return Logical(line[:indent], leaves, [line])
 
 
-_PSEUDO_TOKEN = re.compile(tokenize.PseudoToken)
+# re.UNICODE (the default for text) as tokenize compiles it: one compilation serves both
+_PSEUDO_TOKEN = re.compile(tokenize.PseudoToken, re.UNICODE)
 _BRACKET_MARKS = re.compile(r"[()\[\]{}]")
 
 
@@ -457,6 +462,8 @@ def _format_lines(
 ) -> str:
     """format_source over lines that begin statements or are copied (`quick_line`), the
     others tokenized statement by statement."""
+    from swarmgen.backends.pyassign import layout_line  # it reads with this module's helpers
+
     i, count = 0, len(lines)
     items: list[Logical | str] = []
     while i < count:
@@ -474,6 +481,11 @@ def _format_lines(
         quick = quick_line(line)
         if quick is not None:
             entries.append(Entry((len(quick) - len(code)) // 4, [quick], code))
+            i += 1
+            continue
+        split = layout_line(line) if len(line) > LINE_LENGTH else None
+        if split is not None:  # a long literal or call, read back into `pylayout`'s nodes
+            entries.append(Entry((len(line) - len(code)) // 4, split, code))
             i += 1
             continue
         statement = one_line_statement(line)

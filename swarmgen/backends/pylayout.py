@@ -136,6 +136,7 @@ def layout(call: Call, depth: int) -> list[str] | None:
 # (`_cond_12`), so a few dozen shapes cover a chart and `_REWRITTEN`'s scan (its lookbehinds
 # are tried at every position) runs once per shape.
 _DIGITS = re.compile(r"\d+")
+_TOKEN = re.compile(r"'[^'\"]*'|\"[^'\"]*\"|[A-Za-z0-9_.]+")
 
 
 @functools.lru_cache(maxsize=4096)
@@ -144,13 +145,27 @@ def _plain_shape(code: str) -> bool:
     return _ALLOWED.fullmatch(code) is not None and _REWRITTEN.search(code) is None
 
 
+def plain_shape(code: str) -> bool:
+    """The code of a statement or value (each string literal as `@`) is in the narrow form:
+    black's only delimiters in it are commas and it rewrites nothing but the quotes."""
+    return _plain_shape(_DIGITS.sub("0", code))
+
+
+def split_node(prefix: str, node: Call | Seq, depth: int) -> list[str] | None:
+    """The lines of `prefix + node` at `depth` split as black splits a statement that ends with
+    `node`'s bracket (no quote change); None when not in the forms reproduced here."""
+    return _split(prefix, node, "", depth)
+
+
 def _split(prefix: str, node: Node, suffix: str, depth: int, top: bool = False) -> list[str] | None:
     """The lines of `prefix + node + suffix` at `depth`, split as black splits it."""
     text = INDENT * depth + prefix + flat(node) + suffix
     if len(text) <= LINE_LENGTH:
         return [text]
     if isinstance(node, str):
-        return None  # an atom black would split somewhere inside, or leave too long
+        # one of several elements that is one token (a name, a number, a plain string): black
+        # has nothing to split in it and leaves it too long; any other atom is not reproduced
+        return [text] if suffix == "," and _TOKEN.fullmatch(node) else None
     if isinstance(node, Call):
         if not top and node.callee.count(".") > 1:
             return None  # an attribute chain: black's dot delimiters are not reproduced here

@@ -3,6 +3,7 @@ swarmgen installed: `swarmgen.runtime` (standard library only) and `swarmgen.ros
 
 from __future__ import annotations
 
+import functools
 import re
 from pathlib import Path, PurePosixPath
 
@@ -42,8 +43,17 @@ def _copies(
     imports: re.Pattern[str],
     replacement: str,
 ) -> dict[PurePosixPath, str]:
-    files = {}
-    for module in ("__init__", *modules):
-        text = imports.sub(replacement, (directory / f"{module}.py").read_text(encoding="utf-8"))
-        files[folder / f"{module}.py"] = header(copy_of=f"{dotted}.{module}") + "\n" + text
-    return files
+    return {
+        folder / f"{module}.py": _copy(directory, dotted, module, imports, replacement)
+        for module in ("__init__", *modules)
+    }
+
+
+@functools.cache
+def _copy(
+    directory: Path, dotted: str, module: str, imports: re.Pattern[str], replacement: str
+) -> str:
+    """One module's vendored text. Memoised in the process (the asyncio, smach and rclpy
+    packages vendor the same modules; swarmgen's own sources, never written to disk)."""
+    text = imports.sub(replacement, (directory / f"{module}.py").read_text(encoding="utf-8"))
+    return header(copy_of=f"{dotted}.{module}") + "\n" + text

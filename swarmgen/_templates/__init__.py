@@ -1,0 +1,1 @@
+"""Compiled templates: see swarmgen/precompiled.py."""
