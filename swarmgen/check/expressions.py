@@ -49,6 +49,13 @@ def check_expressions(model: Model) -> list[Diagnostic]:
             found.extend(_actions(index, state.entry, scope, _NO_EVENT, state.span, "entry action"))
             found.extend(_actions(index, state.exit, scope, _NO_EVENT, state.span, "exit action"))
             found.extend(_bindings(index, state, scope))
+            for invoke in state.invokes:  # its params' names are the child's (not checked here)
+                found += [
+                    _invalid(invoke.span, "invoke", "reads", node)
+                    for param in invoke.params
+                    for node in expr.walk(param.value)
+                    if isinstance(node, expr.Invalid)
+                ]
     return found + _unknown_states(model)
 
 
@@ -131,6 +138,9 @@ def _names(
     found = []
     for name in sorted(expr.free_names(e) - scope.keys()):
         found.append(_unknown_name(span, dg.DEFAULT, what, name, scope))
+    for node in expr.walk(e):  # an SCXML document's undeclared reference: fails when it runs
+        if isinstance(node, expr.Invalid):
+            found.append(_invalid(span, what, "reads", node))
     if fields is not None:
         for name in sorted(expr.event_fields(e) - fields):
             found.append(
@@ -142,6 +152,11 @@ def _names(
                 )
             )
     return found
+
+
+def _invalid(span: Span, what: str, verb: str, node: expr.Invalid) -> Diagnostic:
+    """SG158: a reference that is no location, kept to fail when it runs (W3C's semantics)."""
+    return dg.INVALID_LOCATION.at(span, what=what, verb=verb, location=node.location)
 
 
 def _unknown_name(
@@ -177,8 +192,11 @@ def _actions(
     found: list[Diagnostic] = []
     for action in expr.flat(actions):
         if isinstance(action, expr.Assign):
-            if action.target not in scope and action.target not in expr.SYSTEM_VARIABLES:
-                found.append(_unknown_name(span, "assigns", what, action.target, scope))
+            assigned = action.target
+            if isinstance(assigned, expr.Invalid):  # an SCXML document's: fails when it runs
+                found.append(_invalid(span, what, "assigns", assigned))
+            elif assigned not in scope and assigned not in expr.SYSTEM_VARIABLES:
+                found.append(_unknown_name(span, "assigns", what, assigned, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
         if isinstance(action, expr.Done):

@@ -204,7 +204,7 @@ def compile_guard(e: expr.Expr) -> Compiled:
     name = _names(e)
     if name is not None:
         return lambda env: env.get(name)
-    if isinstance(e, expr.Attr | expr.System | expr.InState | expr.ListOf):  # unknown here
+    if isinstance(e, expr.Attr | expr.System | expr.InState | expr.Invalid | expr.ListOf):
         return _attribute
     if isinstance(e, expr.Unary):
         operand = compile_guard(e.operand)

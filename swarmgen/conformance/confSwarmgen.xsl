@@ -47,11 +47,8 @@
 <xsl:template match="@conf:id"><xsl:attribute name="id">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
 <xsl:template match="@conf:name"><xsl:attribute name="name">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
 <xsl:template match="@conf:location"><xsl:attribute name="location">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
-<!-- an <assign> to a location the datamodel cannot assign: swarmgen refuses an undeclared name
-     when it compiles, so the one that fails when it runs is a read-only system variable (W3C
-     5.10: error.execution, as for an invalid location; docs/conformance.md). Read elsewhere
-     (a <param location>), a location that is no data id, which the reader refuses. -->
-<xsl:template match="scxml:assign/@conf:invalidLocation"><xsl:attribute name="location">_name</xsl:attribute></xsl:template>
+<!-- an invalid location, as confEcma.xsl writes it: the SCXML reader keeps a location that no
+     <data> declares as invalid("foo.bar.baz"), error.execution when it runs (docs/scxml-input.md) -->
 <xsl:template match="@conf:invalidLocation"><xsl:attribute name="location">foo.bar.baz</xsl:attribute></xsl:template>
 <xsl:template match="@conf:systemVarLocation"><xsl:attribute name="location"><xsl:value-of select="."/></xsl:attribute></xsl:template>
 

@@ -259,6 +259,15 @@ DUPLICATE_REGION_NAME = register(
     hint="rename one of them",
     notes={"other-at": "the other is at {where}"},
 )
+INVALID_LOCATION = register(
+    "SG158",
+    "invalid-location",
+    "an SCXML document reads or assigns a location that is none: error.execution when it runs",
+    WARNING,
+    message="{what} {verb} `{location}`, which is no location the document declares: it raises "
+    "error.execution when it runs (W3C 5.4, 5.9, 6.4)",
+    hint="declare it (`<data id=...>`), or remove the reference if the error is not intended",
+)
 LIVELOCK = register(
     "SG160",
     "livelock",
@@ -451,6 +460,7 @@ __all__ = [
     "GENERALISATION_CYCLE",
     "INITIAL_LEAVES_REGION",
     "INPUT_MAYBE_UNSET",
+    "INVALID_LOCATION",
     "LIVELOCK",
     "MISSING_CAPABILITY",
     "MISSING_PARAMETER",

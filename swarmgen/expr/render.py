@@ -22,6 +22,7 @@ from swarmgen.expr.tree import (
     EventField,
     Expr,
     InState,
+    Invalid,
     ListOf,
     Name,
     Raise,
@@ -110,6 +111,8 @@ def to_text(expr: Expr) -> str:
             return expr.name
         case InState():
             return f"In({_const_text(expr.state)})"
+        case Invalid():
+            return f"invalid({_const_text(expr.location)})"
         case ListOf():
             return "[" + ", ".join(to_text(i) for i in expr.items) + "]"
         case Attr():
@@ -186,6 +189,8 @@ def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:
             return expr.name  # the SCXML datamodel's own system variables
         case InState():
             return f"In({_js_string(expr.state)})"
+        case Invalid():  # throws: Qt SCXML raises error.execution
+            return f"$sg.invalid({_js_string(expr.location)})"
         case ListOf():
             return "[" + ", ".join(to_ecmascript(i, name) for i in expr.items) + "]"
         case Attr() if expr.obj == _EVENT:
@@ -233,6 +238,8 @@ def to_python(expr: Expr, name: Callable[[str], str], event_field: Callable[[str
             return f"ctx.system({expr.name!r})"
         case InState():
             return f"ctx.is_active({expr.state!r})"
+        case Invalid():  # raises: error.execution
+            return f"ctx.invalid({expr.location!r})"
         case ListOf():
             return "[" + ", ".join(to_python(i, name, event_field) for i in expr.items) + "]"
         case Attr():

@@ -159,6 +159,22 @@ class InState(_Model):
     state: Annotated[str, AfterValidator(_state_name)]
 
 
+def _location_text(value: str) -> str:
+    if not value or not value.isprintable() or len(value) > 200:
+        raise ValueError("a location is 1 to 200 printable characters")
+    return value
+
+
+class Invalid(_Model):
+    """``invalid("foo.bar")``: a location the document never declares, or text that is no
+    location (an SCXML document's reference, kept as written): reading it, or assigning it,
+    fails when it runs, W3C's error.execution (5.4, 5.9, 6.4), as the SCXML reader reads a
+    document whose data the datamodel checks only then (docs/scxml-input.md)."""
+
+    kind: Literal["invalid"] = "invalid"
+    location: Annotated[str, AfterValidator(_location_text)]
+
+
 class Attr(_Model):
     """``obj.name`` where obj is a name, an event field or another attribute access."""
 
@@ -198,7 +214,7 @@ class Else(_Model):
 
 
 Expr = Annotated[
-    Const | Name | EventField | System | InState | ListOf | Attr | Unary | Binary | Else,
+    Const | Name | EventField | System | InState | Invalid | ListOf | Attr | Unary | Binary | Else,
     Field(discriminator="kind"),
 ]
 Operand = Annotated[Expr, AfterValidator(_not_else)]
@@ -228,11 +244,12 @@ Location = Annotated[str, AfterValidator(_location)]
 
 
 class Assign(_Model):
-    """``name = expr``: set a member data item. To a system variable (`_sessionid = e`) it
-    sets nothing and raises error.execution when it runs (W3C 5.10: they are read-only)."""
+    """``name = expr``: set a member data item. To a system variable (`_sessionid = e`) or an
+    invalid location (`invalid("x") = e`) it sets nothing and raises error.execution when it
+    runs (W3C 5.10: system variables are read-only; 5.4: a location that is none)."""
 
     kind: Literal["assign"] = "assign"
-    target: Location
+    target: Location | Invalid
     value: Operand
 
 

@@ -285,6 +285,12 @@ class _Parser:
             if field not in expr.EVENT_META:
                 raise ExprUnsupported("$sg.meta needs a field of _event in quotes")
             return self.postfix(expr.Attr(obj=expr.System(name="_event"), name=field))
+        if function == "invalid":  # `invalid("x")`, a location that is none, as emitted
+            kind, text = self.take()
+            self.take(")")
+            if kind != "str":
+                raise ExprUnsupported("$sg.invalid needs a location in quotes")
+            return expr.Invalid(location=_string(text))
         raise ExprUnsupported(f"$sg.{function} is only read where the emitter writes it")
 
     def event_field(self) -> expr.Expr:

@@ -125,5 +125,12 @@ if ($sg.meta !== undefined) {
   };
 }
 """
+# A location the document reads that is none (`invalid("x")`, only in a document that has one:
+# an SCXML input's undeclared reference): it throws, so Qt SCXML raises error.execution as the
+# engine does (`runtime.chart.Context.invalid`, W3C 5.4, 5.9, 6.4).
+INVALID_SCRIPT = """
+$sg.invalid = function (l) { throw new ReferenceError(l + " is not a valid location"); };
+"""
+INVALID_CALL = "$sg.invalid("
 TICK = "$sg.tick(_event)"
 SPIN = "$sg.spin()"
