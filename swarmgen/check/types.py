@@ -98,6 +98,14 @@ class _Typer:
             return "bool"
         if isinstance(e, expr.Invalid):  # no value: it fails when it runs
             return None
+        if isinstance(e, expr.StartsWith):
+            for side in (e.text, e.prefix):
+                found = self.infer(side)
+                if found is not None and found != "string":
+                    self.errors.append(
+                        f"'startswith' takes strings, not {_word(found)}: `{_text(e)}`"
+                    )
+            return "bool"
         if isinstance(e, expr.System):  # `_event` is read field by field
             return "string" if e.name in ("_sessionid", "_name") else None
         if isinstance(e, expr.Attr) and isinstance(e.obj, expr.System):

@@ -138,7 +138,9 @@
 <xsl:template match="@conf:eventdataSomeVal"><xsl:attribute name="cond">_event.data == 123</xsl:attribute></xsl:template>
 <xsl:template match="@conf:emptyEventData"><xsl:attribute name="cond">typeof _event.data === 'undefined'</xsl:attribute></xsl:template>
 <xsl:template match="@conf:nameVarVal"><xsl:attribute name="cond">_name === '<xsl:value-of select="."/>'</xsl:attribute></xsl:template>
-<xsl:template match="@conf:varPrefix"><xsl:attribute name="cond">startsWith(Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[4]"/>, Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[2]"/>)</xsl:attribute></xsl:template>
+<!-- "n m": Varn is a prefix of Varm (confEcma.xsl's underscore.string startswith), in
+     ECMAScript's own String.prototype.startsWith, which the reader reads as startswith(t, p) -->
+<xsl:template match="@conf:varPrefix"><xsl:attribute name="cond">Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[4]"/>.startsWith(Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[2]"/>)</xsl:attribute></xsl:template>
 <xsl:template match="@conf:inState"><xsl:attribute name="cond">In('<xsl:value-of select="."/>')</xsl:attribute></xsl:template>
 <!-- a cond that cannot be evaluated to a boolean: one that fails (see illegalExpr) -->
 <xsl:template match="@conf:nonBoolean"><xsl:attribute name="cond">1 / 0 == 0</xsl:attribute></xsl:template>

@@ -30,6 +30,7 @@ from swarmgen.expr.tree import (
     Invalid,
     ListOf,
     Name,
+    StartsWith,
     System,
     Unary,
     UnOp,
@@ -226,6 +227,8 @@ class _Parser:
             return self.in_state()
         if tok.text == "invalid" and self.is_op("(", self.peek()):
             return self.invalid()
+        if tok.text == "startswith" and self.is_op("(", self.peek()):
+            return self.starts_with()
         if tok.text != "event":
             return Name(name=tok.text), 1
         if not self.is_op(".", self.peek()):
@@ -262,6 +265,20 @@ class _Parser:
             return Invalid(location=text.value), 1
         except ValueError as err:
             self.fail(text, str(err).splitlines()[-1])
+
+    def starts_with(self) -> _Node:
+        """`startswith(text, prefix)`: whether the string text begins with the string prefix."""
+        opening = self.advance()
+        self.enter(opening)
+        text, text_depth = self.expr(0)
+        comma = self.peek()
+        if not self.is_op(",", comma):
+            self.fail(comma, "startswith() takes two strings: startswith(text, prefix)")
+        self.advance()
+        prefix, prefix_depth = self.expr(0)
+        self.close(opening)
+        self.nest -= 1
+        return StartsWith(text=text, prefix=prefix), max(text_depth, prefix_depth) + 1
 
     def system(self, tok: Tok) -> _Node:
         """A system variable; `_event` only through one of its fields."""

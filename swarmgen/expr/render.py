@@ -27,6 +27,7 @@ from swarmgen.expr.tree import (
     Name,
     Raise,
     Send,
+    StartsWith,
     System,
     Unary,
     Value,
@@ -121,6 +122,8 @@ def to_text(expr: Expr) -> str:
             return _unary_text(expr)
         case Binary():
             return _binary_text(expr)
+        case StartsWith():
+            return f"startswith({to_text(expr.text)}, {to_text(expr.prefix)})"
         case Else():
             return "else"
         case _:
@@ -204,6 +207,9 @@ def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:
             return f"({op}{to_ecmascript(expr.operand, name)})"
         case Binary():
             return _js_binary(expr, name)
+        case StartsWith():  # `$sg.startswith`: both strings, else it throws (error.execution)
+            text, prefix = to_ecmascript(expr.text, name), to_ecmascript(expr.prefix, name)
+            return f"$sg.startswith({text}, {prefix})"
         case Else():
             return "true"
         case _:
@@ -250,6 +256,9 @@ def to_python(expr: Expr, name: Callable[[str], str], event_field: Callable[[str
         case Binary():
             left = to_python(expr.left, name, event_field)
             return f"({left} {expr.op} {to_python(expr.right, name, event_field)})"
+        case StartsWith():  # both strings, else it raises (error.execution)
+            text = to_python(expr.text, name, event_field)
+            return f"ctx.startswith({text}, {to_python(expr.prefix, name, event_field)})"
         case Else():
             return "True"
         case _:

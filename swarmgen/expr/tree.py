@@ -207,6 +207,15 @@ class Binary(_Model):
     right: Operand
 
 
+class StartsWith(_Model):
+    """``startswith(text, prefix)``: whether the string `text` begins with the string `prefix`
+    (both strings: another value is an error when it runs, error.execution)."""
+
+    kind: Literal["startswith"] = "startswith"
+    text: Operand
+    prefix: Operand
+
+
 class Else(_Model):
     """UML's ``else`` guard: true when no other guard of the choice holds."""
 
@@ -214,7 +223,18 @@ class Else(_Model):
 
 
 Expr = Annotated[
-    Const | Name | EventField | System | InState | Invalid | ListOf | Attr | Unary | Binary | Else,
+    Const
+    | Name
+    | EventField
+    | System
+    | InState
+    | Invalid
+    | ListOf
+    | Attr
+    | Unary
+    | Binary
+    | StartsWith
+    | Else,
     Field(discriminator="kind"),
 ]
 Operand = Annotated[Expr, AfterValidator(_not_else)]
@@ -396,6 +416,8 @@ def _children(e: Expr) -> tuple[Expr, ...]:
         return (e.operand,)
     if isinstance(e, Binary):
         return (e.left, e.right)
+    if isinstance(e, StartsWith):
+        return (e.text, e.prefix)
     return ()
 
 
@@ -430,6 +452,8 @@ def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
         if left is expr.left and right is expr.right:
             return expr
         return Binary(op=expr.op, left=left, right=right)
+    if isinstance(expr, StartsWith):
+        return _operands(expr, lambda e: replace_fields(e, names))
     return expr
 
 
@@ -451,6 +475,8 @@ def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
         if left is expr.left and right is expr.right:
             return expr
         return Binary(op=expr.op, left=left, right=right)
+    if isinstance(expr, StartsWith):
+        return _operands(expr, lambda e: resolve_enums(e, enums))
     return expr
 
 
@@ -610,7 +636,17 @@ def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
         if left is expr.left and right is expr.right:
             return expr
         return Binary(op=expr.op, left=left, right=right)
+    if isinstance(expr, StartsWith):
+        return _operands(expr, lambda e: resolve_states(e, ids))
     return expr
+
+
+def _operands(expr: StartsWith, rewrite: Callable[[Expr], Expr]) -> StartsWith:
+    """`startswith` with `rewrite` applied to its operands (itself when neither changes)."""
+    text, prefix = rewrite(expr.text), rewrite(expr.prefix)
+    if text is expr.text and prefix is expr.prefix:
+        return expr
+    return StartsWith(text=text, prefix=prefix)
 
 
 def _items(expr: ListOf, rewrite: Callable[[Expr], Expr]) -> ListOf:

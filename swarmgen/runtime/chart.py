@@ -246,6 +246,14 @@ class Context:
         when it runs, so the engine does and the rest of the block is skipped."""
         raise LookupError(f"{location!r} is not a valid location")
 
+    @staticmethod
+    def startswith(text: Any, prefix: Any) -> bool:
+        """`startswith(text, prefix)`: both strings, else an error (error.execution), as the
+        SCXML document's `$sg.startswith`."""
+        if not isinstance(text, str) or not isinstance(prefix, str):
+            raise TypeError(f"startswith takes strings, not {text!r} and {prefix!r}")
+        return text.startswith(prefix)
+
     def is_active(self, node_id: str) -> bool:
         """`In(state)`: whether the state is active."""
         return bool(self._engine.is_active(node_id))

@@ -26,6 +26,8 @@ from swarmgen.scxml.support import (
     INVALID_SCRIPT,
     META_SCRIPT,
     SPIN,
+    STARTS_CALL,
+    STARTS_SCRIPT,
     STEP_SCRIPT,
     SUPPORT_SCRIPT,
     TICK,
@@ -88,8 +90,10 @@ def _document(chart: c.Chart) -> etree._Element:
     script = _sub(scxml, "script")
     for node in chart.children:
         writer.node(scxml, node)
-    # an invalid location's read (`$sg.invalid`) may stand in any expression the writer wrote
-    invalid = any(INVALID_CALL in v for e in scxml.iter() for v in e.attrib.values())
+    # `$sg.invalid` and `$sg.startswith` may stand in any expression the writer wrote
+    written = [v for e in scxml.iter() for v in e.attrib.values()]
+    invalid = any(INVALID_CALL in v for v in written)
+    starts = any(STARTS_CALL in v for v in written)
     script.text = (
         SUPPORT_SCRIPT
         + (STEP_SCRIPT if bounded else "")
@@ -97,6 +101,7 @@ def _document(chart: c.Chart) -> etree._Element:
         + (META_SCRIPT if meta else "")
         + (CONTENT_SCRIPT if _sends_content(chart) else "")
         + (INVALID_SCRIPT if invalid else "")
+        + (STARTS_SCRIPT if starts else "")
     )
     _metadata(scxml, chart)
     return scxml
