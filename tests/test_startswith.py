@@ -12,6 +12,7 @@ import pytest
 
 from swarmgen import expr, pipeline, replay
 from swarmgen.frontend.scxml_expr import translate
+from tests.skips import requires_rclpy
 
 BACKENDS = ("asyncio", "smach", "scxml")
 
@@ -63,6 +64,15 @@ def test_it_agrees_everywhere(tmp_path: Path, qt_available: None) -> None:
         assert trace == traces["scxml"], f"{backend} differs from Qt SCXML:\n{trace}"
     assert [r["active"] for r in traces["scxml"]] == [["s0"], ["s1"], ["s2"], ["pass_"]]
     assert traces["scxml"][-1]["errors"] == 1 and traces["scxml"][-1]["data"]["n"] == 1
+
+
+@requires_rclpy
+def test_the_rclpy_host_agrees(tmp_path: Path, qt_available: None) -> None:
+    source = tmp_path / "sw.scxml"
+    source.write_text(DOCUMENT, encoding="utf-8")
+    steps: list[dict[str, object]] = [{"event": "go"}] * 3
+    traces = {b: replay.replay(source, "Sw", steps, b) for b in ("rclpy", "scxml")}
+    assert traces["rclpy"] == traces["scxml"]
 
 
 def test_the_emitted_document_reads_back_to_itself(tmp_path: Path) -> None:
