@@ -149,7 +149,8 @@ def test_an_invalid_namelist_cancels_the_invoke(tmp_path: Path, qt_available: No
 
 def test_the_emitted_document_reads_back_to_itself(tmp_path: Path) -> None:
     """`invalid(...)` is written as `$sg.invalid("...")` (a read) or the location as it was (an
-    `<assign>`), both read back as the same `invalid(...)`."""
+    `<assign>`), both read back as the same `invalid(...)`; the XMI conversion keeps it as
+    written in the action language, and compiles to the same SCXML."""
 
     def body(path: Path) -> list[str]:
         files = pipeline.compile_model(path, ["scxml"]).files
@@ -164,6 +165,11 @@ def test_the_emitted_document_reads_back_to_itself(tmp_path: Path) -> None:
         assert body(emitted) == body(source)
         codes = [d.code.id for d in pipeline.validate(emitted).diagnostics]
         assert "SG158" in codes and "SG112" not in codes
+    xmi = pipeline.convert_model(tmp_path / "Iv.scxml").xmi  # (an invoke has no XMI)
+    assert xmi is not None and b'invalid("nope") = 1' in xmi
+    converted = tmp_path / "converted.xmi"
+    converted.write_bytes(xmi)
+    assert body(converted) == body(tmp_path / "Iv.scxml")
 
 
 def _machine_model(tmp_path: Path, effect: str) -> Path:
