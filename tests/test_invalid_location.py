@@ -172,7 +172,9 @@ def test_the_emitted_document_reads_back_to_itself(tmp_path: Path) -> None:
     assert body(converted) == body(tmp_path / "Iv.scxml")
 
 
-def _machine_model(tmp_path: Path, effect: str) -> Path:
+def _machine_model(
+    tmp_path: Path, effect: str, data: dict[str, tuple[str, object]] | None = None
+) -> Path:
     kit = ModelKit("Iv")
     kit.event("go", sender="station")
     machine = kit.machine("BotMachine")
@@ -180,7 +182,7 @@ def _machine_model(tmp_path: Path, effect: str) -> Path:
     machine.state("Idle")
     machine.final("Done")
     machine.transition("Idle", "Done", "go", effect=effect)
-    kit.member("Bot", machine)
+    kit.member("Bot", machine, data=data)
     kit.swarm("Swarm", {"Bot": 1})
     model = tmp_path / "iv.xmi"
     model.write_text(kit.xmi(), encoding="utf-8")
@@ -196,3 +198,17 @@ def test_an_xmi_models_undeclared_name_stays_an_error(tmp_path: Path) -> None:
     ]
     found = pipeline.validate(_machine_model(tmp_path, "x = ghost.field")).diagnostics
     assert {d.code.id for d in found if d.level.value == "error"} == {"SG112"}
+
+
+def test_an_invalid_location_names_no_member_data(tmp_path: Path) -> None:
+    """Written by hand, `invalid("x") = e` on member data x would be assigned by the emitted
+    `<assign location="x">` in Qt SCXML where Python fails: SG159, an error. A location that
+    is none (`ghost`) is only the warning."""
+    data = {"count": ("Integer", 0)}
+    found = pipeline.validate(_machine_model(tmp_path, 'invalid("count.x") = 1', data))
+    assert [(d.code.id, d.level.value) for d in found.diagnostics if "count" in d.message] == [
+        ("SG158", "warning"),
+        ("SG159", "error"),
+    ]
+    found = pipeline.validate(_machine_model(tmp_path, 'invalid("ghost") = 1', data))
+    assert [d.code.id for d in found.diagnostics if "ghost" in d.message] == ["SG158"]

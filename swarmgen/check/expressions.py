@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 
 from swarmgen import diagnostics as dg
@@ -13,6 +14,8 @@ from swarmgen.names import identifier
 from swarmgen.span import Span
 
 _NO_EVENT = frozenset[str]()
+# the datum an assignment's location starts with: `x`, `x.y`, `x["y"]`
+_ROOT = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:$|[.\[])")
 
 
 def check_expressions(model: Model) -> list[Diagnostic]:
@@ -159,6 +162,18 @@ def _invalid(span: Span, what: str, verb: str, node: expr.Invalid) -> Diagnostic
     return dg.INVALID_LOCATION.at(span, what=what, verb=verb, location=node.location)
 
 
+def _declared_invalid(
+    span: Span, what: str, node: expr.Invalid, scope: dict[str, Property]
+) -> list[Diagnostic]:
+    """SG159: `invalid("x") = e` where x is member data, which the emitted `<assign>` (the
+    location as written) would assign where Python fails (the SCXML reader never makes one)."""
+    root = _ROOT.match(node.location)
+    if root is None or root.group(1) not in scope:
+        return []
+    values = {"what": what, "location": node.location, "name": root.group(1)}
+    return [dg.DECLARED_INVALID_LOCATION.at(span, **values)]
+
+
 def _unknown_name(
     span: Span, variant: str, what: str, name: str, scope: Iterable[str]
 ) -> Diagnostic:
@@ -195,6 +210,7 @@ def _actions(
             assigned = action.target
             if isinstance(assigned, expr.Invalid):  # an SCXML document's: fails when it runs
                 found.append(_invalid(span, what, "assigns", assigned))
+                found.extend(_declared_invalid(span, what, assigned, scope))
             elif assigned not in scope and assigned not in expr.SYSTEM_VARIABLES:
                 found.append(_unknown_name(span, "assigns", what, assigned, scope))
             found.extend(_names(action.value, scope, fields, span, what))

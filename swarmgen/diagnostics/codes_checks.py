@@ -268,6 +268,14 @@ INVALID_LOCATION = register(
     "error.execution when it runs (W3C 5.4, 5.9, 6.4)",
     hint="declare it (`<data id=...>`), or remove the reference if the error is not intended",
 )
+DECLARED_INVALID_LOCATION = register(
+    "SG159",
+    "declared-invalid-location",
+    'an assignment to invalid("x") where x is member data',
+    message="{what} assigns `{location}` as an invalid location, but '{name}' is member data: "
+    "the SCXML document would assign it",
+    hint="write `{name} = ...` to assign it (invalid(...) is a location that is none)",
+)
 LIVELOCK = register(
     "SG160",
     "livelock",
@@ -455,6 +463,7 @@ __all__ = [
     "BAD_OUTCOME_NAME",
     "CHOICE_WITHOUT_ELSE",
     "COMPOSITION_CYCLE",
+    "DECLARED_INVALID_LOCATION",
     "DUPLICATE_REGION_NAME",
     "ENTERS_INITIAL",
     "GENERALISATION_CYCLE",
