@@ -251,6 +251,8 @@ class ChartRenderer:
         return self._function("action", lines) if lines else None
 
     def _action_lines(self, action: c.Action) -> list[str]:
+        if isinstance(action, c.Assign) and action.invalid:
+            return [f"ctx.invalid({action.location!r})"]  # raises: error.execution
         if isinstance(action, c.Assign) and action.location in expr.SYSTEM_VARIABLES:
             return [f"ctx.assign_system({action.location!r})"]  # raises: error.execution
         if isinstance(action, c.Assign):

@@ -163,7 +163,7 @@ def _action_reads(actions: tuple[c.Action, ...], ids: dict[str, str]) -> set[str
 
 
 def _assigned(actions: tuple[c.Action, ...]) -> set[str]:
-    found = {a.location for a in c.flat(actions) if isinstance(a, c.Assign)}
+    found = {a.location for a in c.flat(actions) if isinstance(a, c.Assign) and not a.invalid}
     found -= expr.SYSTEM_VARIABLES  # read-only: assigning one writes nothing
     for loop in c.flat(actions):
         if isinstance(loop, c.ForEach):

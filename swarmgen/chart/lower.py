@@ -293,7 +293,9 @@ class _Lowering(Transitions):
 
     def _invoke(self, invoke: Invoke) -> c.Invoke:
         """The child's own chart (lowered as a model of its own) and what the parent gives
-        it: params by the child's data ids (a name the child does not declare sets nothing)."""
+        it: params by the child's data ids (a name the child does not declare sets nothing,
+        but one that reads an invalid location stays: it fails when the invoke starts, and W3C
+        6.4 cancels the invoke with error.execution)."""
         chart = lower(invoke.session)[0]
         child_ids = {d.name: d.id for d in chart.data}
         location = self.data.get(invoke.idlocation or "")
@@ -305,7 +307,10 @@ class _Lowering(Transitions):
             kind_expr=invoke.kind_expr,
             autoforward=invoke.autoforward,
             params=tuple(
-                c.Param(child_ids[p.name], p.value) for p in invoke.params if p.name in child_ids
+                c.Param(child_ids.get(p.name, p.name), p.value)
+                for p in invoke.params
+                if p.name in child_ids
+                or any(isinstance(e, expr.Invalid) for e in expr.walk(p.value))
             ),
             finalize=self._actions(invoke.finalize, ()),
         )

@@ -16,10 +16,12 @@ NodeKind = Literal["state", "parallel", "final", "history"]
 
 @dataclass(frozen=True, slots=True)
 class Assign:
-    """`location = value` on member data."""
+    """`location = value` on member data; an invalid location (an SCXML document's, kept as
+    written) assigns nothing and fails when it runs (error.execution)."""
 
-    location: str  # data id
+    location: str  # data id, a system variable, or the invalid location's text
     value: expr.Expr
+    invalid: bool = False
 
 
 @dataclass(frozen=True, slots=True)

@@ -245,10 +245,7 @@ class Transitions(Context):
             if outputs:
                 action = _read_outputs(action, outputs)
             if isinstance(action, expr.Assign):
-                target = action.target  # a system variable keeps its name (read-only)
-                if target not in expr.SYSTEM_VARIABLES:
-                    target = self._data_ident(target)
-                lowered.append(c.Assign(target, action.value))
+                lowered.append(self._assign(action))
                 continue
             if isinstance(action, expr.Cancel):
                 lowered.append(c.Cancel(action.sendid, action.expr))
@@ -277,6 +274,16 @@ class Transitions(Context):
                 lowered.append(c.Send(self._event_ident(action.event), params))
         lowered += [c.Opaque(code.language or "unspecified", code.body) for code in opaque]
         return tuple(lowered)
+
+    def _assign(self, action: expr.Assign) -> c.Assign:
+        """To a datum by its id; a system variable keeps its name (read-only), an invalid
+        location its text (both assign nothing and fail when they run)."""
+        target = action.target
+        if isinstance(target, expr.Invalid):
+            return c.Assign(target.location, action.value, invalid=True)
+        if target in expr.SYSTEM_VARIABLES:
+            return c.Assign(target, action.value)
+        return c.Assign(self._data_ident(target), action.value)
 
     def _raise(self, action: expr.Raise) -> c.Raise:
         """A raise with its fields (or its content value), its event's runtime name ("" when

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable
 
 from swarmgen import diagnostics as dg
@@ -13,6 +14,8 @@ from swarmgen.names import identifier
 from swarmgen.span import Span
 
 _NO_EVENT = frozenset[str]()
+# the datum an assignment's location starts with: `x`, `x.y`, `x["y"]`
+_ROOT = re.compile(r"\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:$|[.\[])")
 
 
 def check_expressions(model: Model) -> list[Diagnostic]:
@@ -49,6 +52,13 @@ def check_expressions(model: Model) -> list[Diagnostic]:
             found.extend(_actions(index, state.entry, scope, _NO_EVENT, state.span, "entry action"))
             found.extend(_actions(index, state.exit, scope, _NO_EVENT, state.span, "exit action"))
             found.extend(_bindings(index, state, scope))
+            for invoke in state.invokes:  # its params' names are the child's (not checked here)
+                found += [
+                    _invalid(invoke.span, "invoke", "reads", node)
+                    for param in invoke.params
+                    for node in expr.walk(param.value)
+                    if isinstance(node, expr.Invalid)
+                ]
     return found + _unknown_states(model)
 
 
@@ -131,6 +141,9 @@ def _names(
     found = []
     for name in sorted(expr.free_names(e) - scope.keys()):
         found.append(_unknown_name(span, dg.DEFAULT, what, name, scope))
+    for node in expr.walk(e):  # an SCXML document's undeclared reference: fails when it runs
+        if isinstance(node, expr.Invalid):
+            found.append(_invalid(span, what, "reads", node))
     if fields is not None:
         for name in sorted(expr.event_fields(e) - fields):
             found.append(
@@ -142,6 +155,23 @@ def _names(
                 )
             )
     return found
+
+
+def _invalid(span: Span, what: str, verb: str, node: expr.Invalid) -> Diagnostic:
+    """SG158: a reference that is no location, kept to fail when it runs (W3C's semantics)."""
+    return dg.INVALID_LOCATION.at(span, what=what, verb=verb, location=node.location)
+
+
+def _declared_invalid(
+    span: Span, what: str, node: expr.Invalid, scope: dict[str, Property]
+) -> list[Diagnostic]:
+    """SG159: `invalid("x") = e` where x is member data, which the emitted `<assign>` (the
+    location as written) would assign where Python fails (the SCXML reader never makes one)."""
+    root = _ROOT.match(node.location)
+    if root is None or root.group(1) not in scope:
+        return []
+    values = {"what": what, "location": node.location, "name": root.group(1)}
+    return [dg.DECLARED_INVALID_LOCATION.at(span, **values)]
 
 
 def _unknown_name(
@@ -177,8 +207,12 @@ def _actions(
     found: list[Diagnostic] = []
     for action in expr.flat(actions):
         if isinstance(action, expr.Assign):
-            if action.target not in scope and action.target not in expr.SYSTEM_VARIABLES:
-                found.append(_unknown_name(span, "assigns", what, action.target, scope))
+            assigned = action.target
+            if isinstance(assigned, expr.Invalid):  # an SCXML document's: fails when it runs
+                found.append(_invalid(span, what, "assigns", assigned))
+                found.extend(_declared_invalid(span, what, assigned, scope))
+            elif assigned not in scope and assigned not in expr.SYSTEM_VARIABLES:
+                found.append(_unknown_name(span, "assigns", what, assigned, scope))
             found.extend(_names(action.value, scope, fields, span, what))
             continue
         if isinstance(action, expr.Done):

@@ -204,7 +204,7 @@ def compile_guard(e: expr.Expr) -> Compiled:
     name = _names(e)
     if name is not None:
         return lambda env: env.get(name)
-    if isinstance(e, expr.Attr | expr.System | expr.InState | expr.ListOf):  # unknown here
+    if isinstance(e, expr.Attr | expr.System | expr.InState | expr.Invalid | expr.ListOf):
         return _attribute
     if isinstance(e, expr.Unary):
         operand = compile_guard(e.operand)
@@ -215,11 +215,20 @@ def compile_guard(e: expr.Expr) -> Compiled:
         return lambda env: +_number(operand(env))
     if isinstance(e, expr.Binary):
         return _compile_binary(e.op, compile_guard(e.left), compile_guard(e.right))
+    if isinstance(e, expr.StartsWith):
+        text, prefix = compile_guard(e.text), compile_guard(e.prefix)
+        return lambda env: _starts(text(env), prefix(env))
     return lambda env: True  # Else
 
 
 def _attribute(env: dict[str, Any]) -> Any:
     raise TypeError("attribute of an unknown value")
+
+
+def _starts(text: Any, prefix: Any) -> bool:
+    if not isinstance(text, str) or not isinstance(prefix, str):
+        raise TypeError("startswith takes strings")
+    return text.startswith(prefix)
 
 
 def _number(value: Any) -> int | float:

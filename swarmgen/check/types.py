@@ -96,6 +96,16 @@ class _Typer:
             return f"{kind}[]" if kind is not None and not kind.endswith("[]") else None
         if isinstance(e, expr.InState):
             return "bool"
+        if isinstance(e, expr.Invalid):  # no value: it fails when it runs
+            return None
+        if isinstance(e, expr.StartsWith):
+            for side in (e.text, e.prefix):
+                found = self.infer(side)
+                if found is not None and found != "string":
+                    self.errors.append(
+                        f"'startswith' takes strings, not {_word(found)}: `{_text(e)}`"
+                    )
+            return "bool"
         if isinstance(e, expr.System):  # `_event` is read field by field
             return "string" if e.name in ("_sessionid", "_name") else None
         if isinstance(e, expr.Attr) and isinstance(e.obj, expr.System):
@@ -241,12 +251,13 @@ def _transition(
 
 def _action(index: ModelIndex, typer: _Typer, action: expr.Action, datatypes: set[str]) -> None:
     if isinstance(action, expr.Assign):
-        target = typer.scope.names.get(action.target)
         value = typer.infer(action.value)
-        if action.target not in expr.SYSTEM_VARIABLES and not _compatible(target, value):
-            typer.errors.append(
-                f"'{action.target}' is {_word(target or '')}, assigned {_word(value or '')}"
-            )
+        name = action.target
+        if isinstance(name, expr.Invalid):  # assigns nothing: it fails when it runs
+            return
+        target = typer.scope.names.get(name)
+        if name not in expr.SYSTEM_VARIABLES and not _compatible(target, value):
+            typer.errors.append(f"'{name}' is {_word(target or '')}, assigned {_word(value or '')}")
         return
     if isinstance(action, expr.Cancel):
         return

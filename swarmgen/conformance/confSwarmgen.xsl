@@ -47,11 +47,8 @@
 <xsl:template match="@conf:id"><xsl:attribute name="id">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
 <xsl:template match="@conf:name"><xsl:attribute name="name">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
 <xsl:template match="@conf:location"><xsl:attribute name="location">Var<xsl:value-of select="."/></xsl:attribute></xsl:template>
-<!-- an <assign> to a location the datamodel cannot assign: swarmgen refuses an undeclared name
-     when it compiles, so the one that fails when it runs is a read-only system variable (W3C
-     5.10: error.execution, as for an invalid location; docs/conformance.md). Read elsewhere
-     (a <param location>), a location that is no data id, which the reader refuses. -->
-<xsl:template match="scxml:assign/@conf:invalidLocation"><xsl:attribute name="location">_name</xsl:attribute></xsl:template>
+<!-- an invalid location, as confEcma.xsl writes it: the SCXML reader keeps a location that no
+     <data> declares as invalid("foo.bar.baz"), error.execution when it runs (docs/scxml-input.md) -->
 <xsl:template match="@conf:invalidLocation"><xsl:attribute name="location">foo.bar.baz</xsl:attribute></xsl:template>
 <xsl:template match="@conf:systemVarLocation"><xsl:attribute name="location"><xsl:value-of select="."/></xsl:attribute></xsl:template>
 
@@ -141,7 +138,9 @@
 <xsl:template match="@conf:eventdataSomeVal"><xsl:attribute name="cond">_event.data == 123</xsl:attribute></xsl:template>
 <xsl:template match="@conf:emptyEventData"><xsl:attribute name="cond">typeof _event.data === 'undefined'</xsl:attribute></xsl:template>
 <xsl:template match="@conf:nameVarVal"><xsl:attribute name="cond">_name === '<xsl:value-of select="."/>'</xsl:attribute></xsl:template>
-<xsl:template match="@conf:varPrefix"><xsl:attribute name="cond">startsWith(Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[4]"/>, Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[2]"/>)</xsl:attribute></xsl:template>
+<!-- "n m": Varn is a prefix of Varm (confEcma.xsl's underscore.string startswith), in
+     ECMAScript's own String.prototype.startsWith, which the reader reads as startswith(t, p) -->
+<xsl:template match="@conf:varPrefix"><xsl:attribute name="cond">Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[4]"/>.startsWith(Var<xsl:value-of select="re:match(., '(\w+)(\W)(\w+)')[2]"/>)</xsl:attribute></xsl:template>
 <xsl:template match="@conf:inState"><xsl:attribute name="cond">In('<xsl:value-of select="."/>')</xsl:attribute></xsl:template>
 <!-- a cond that cannot be evaluated to a boolean: one that fails (see illegalExpr) -->
 <xsl:template match="@conf:nonBoolean"><xsl:attribute name="cond">1 / 0 == 0</xsl:attribute></xsl:template>

@@ -126,10 +126,10 @@ def _intro() -> list[str]:
         "- swarmgen: a test that compiles runs on `swarmgen.runtime.engine` with no external "
         f"input; timers fire by due time on a virtual clock (at most {MAX_EVENTS} events and "
         f"{MAX_VIRTUAL_MS // 1000} s of virtual time). A document the reader refuses is not "
-        "run: its diagnostics name the features it needs. swarmgen refuses an assignment to "
-        "an undeclared name when it compiles, so `confSwarmgen.xsl` writes the IRP's invalid "
-        "location of an `<assign>` as a read-only system variable (`_name`), the location its "
-        "datamodel cannot assign when it runs (W3C: error.execution for both).",
+        "run: its diagnostics name the features it needs. A location the document does not "
+        "declare (the IRP's invalid location `foo.bar.baz`, a namelist's `\"foo`) is read as "
+        "one that fails when it runs, error.execution as W3C wants (SG158 warns of it; "
+        "docs/scxml-input.md).",
         "- Qt SCXML: all documents start at once in one process and run for at most "
         f"{WAIT_SECONDS:g} s of wall time. libxslt skips confEcma.xsl's XSLT 2.0 "
         "`analyze-string` (its conds would come out empty, i.e. true), so those attributes are "

@@ -259,6 +259,23 @@ DUPLICATE_REGION_NAME = register(
     hint="rename one of them",
     notes={"other-at": "the other is at {where}"},
 )
+INVALID_LOCATION = register(
+    "SG158",
+    "invalid-location",
+    "an SCXML document reads or assigns a location that is none: error.execution when it runs",
+    WARNING,
+    message="{what} {verb} `{location}`, which is no location the document declares: it raises "
+    "error.execution when it runs (W3C 5.4, 5.9, 6.4)",
+    hint="declare it (`<data id=...>`), or remove the reference if the error is not intended",
+)
+DECLARED_INVALID_LOCATION = register(
+    "SG159",
+    "declared-invalid-location",
+    'an assignment to invalid("x") where x is member data',
+    message="{what} assigns `{location}` as an invalid location, but '{name}' is member data: "
+    "the SCXML document would assign it",
+    hint="write `{name} = ...` to assign it (invalid(...) is a location that is none)",
+)
 LIVELOCK = register(
     "SG160",
     "livelock",
@@ -446,11 +463,13 @@ __all__ = [
     "BAD_OUTCOME_NAME",
     "CHOICE_WITHOUT_ELSE",
     "COMPOSITION_CYCLE",
+    "DECLARED_INVALID_LOCATION",
     "DUPLICATE_REGION_NAME",
     "ENTERS_INITIAL",
     "GENERALISATION_CYCLE",
     "INITIAL_LEAVES_REGION",
     "INPUT_MAYBE_UNSET",
+    "INVALID_LOCATION",
     "LIVELOCK",
     "MISSING_CAPABILITY",
     "MISSING_PARAMETER",

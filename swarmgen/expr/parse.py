@@ -27,8 +27,10 @@ from swarmgen.expr.tree import (
     EventField,
     Expr,
     InState,
+    Invalid,
     ListOf,
     Name,
+    StartsWith,
     System,
     Unary,
     UnOp,
@@ -223,6 +225,10 @@ class _Parser:
             return self.system(tok)
         if tok.text == "In" and self.is_op("(", self.peek()):
             return self.in_state()
+        if tok.text == "invalid" and self.is_op("(", self.peek()):
+            return self.invalid()
+        if tok.text == "startswith" and self.is_op("(", self.peek()):
+            return self.starts_with()
         if tok.text != "event":
             return Name(name=tok.text), 1
         if not self.is_op(".", self.peek()):
@@ -246,6 +252,33 @@ class _Parser:
             return InState(state=name.value), 1
         except ValueError as err:
             self.fail(name, str(err).splitlines()[-1])
+
+    def invalid(self) -> _Node:
+        """`invalid("foo.bar")`: a location that is none, error.execution when it runs."""
+        opening = self.advance()
+        text = self.peek()
+        if text.kind != "str" or not isinstance(text.value, str):
+            self.fail(text, 'invalid() takes the location as written, in quotes: invalid("x")')
+        self.advance()
+        self.close(opening)
+        try:
+            return Invalid(location=text.value), 1
+        except ValueError as err:
+            self.fail(text, str(err).splitlines()[-1])
+
+    def starts_with(self) -> _Node:
+        """`startswith(text, prefix)`: whether the string text begins with the string prefix."""
+        opening = self.advance()
+        self.enter(opening)
+        text, text_depth = self.expr(0)
+        comma = self.peek()
+        if not self.is_op(",", comma):
+            self.fail(comma, "startswith() takes two strings: startswith(text, prefix)")
+        self.advance()
+        prefix, prefix_depth = self.expr(0)
+        self.close(opening)
+        self.nest -= 1
+        return StartsWith(text=text, prefix=prefix), max(text_depth, prefix_depth) + 1
 
     def system(self, tok: Tok) -> _Node:
         """A system variable; `_event` only through one of its fields."""
@@ -387,7 +420,7 @@ class _Parser:
             if not self.at_end_of_statement():
                 self.unexpected(self.peek())
 
-    def assignment(self, what: str) -> tuple[str, Expr]:
+    def assignment(self, what: str) -> tuple[str | Invalid, Expr]:
         start = self.peek()
         if start.text in SYSTEM_VARIABLES and self.is_op("=", self.peek(1)):
             self.advance()  # read-only (`_event` too): error.execution when it runs (W3C)
@@ -399,11 +432,11 @@ class _Parser:
             if self.at_end_of_statement():
                 self.fail(start, what, hint=_assign_hint(lhs))
             self.unexpected(tok)
-        if not isinstance(lhs, Name):
+        if not isinstance(lhs, Name | Invalid):
             self.fail(start, f"can only assign to member data names, not `{_clip(to_text(lhs))}`")
         self.advance()
         value, _ = self.expr(0)
-        return lhs.name, value
+        return lhs.name if isinstance(lhs, Name) else lhs, value
 
 
 def _assign_hint(lhs: Expr) -> str | None:
@@ -446,6 +479,8 @@ def parse_bindings(text: str) -> tuple[Binding, ...]:
     def one() -> None:
         start = parser.peek()
         name, value = parser.assignment(_NOT_BINDING)
+        if isinstance(name, Invalid):
+            parser.fail(start, "a binding names a behaviour argument, not an invalid location")
         if any(b.name == name for b in bindings):
             parser.fail(start, f"duplicate binding '{name}'")
         bindings.append(Binding(name=name, value=value))

@@ -22,10 +22,12 @@ from swarmgen.expr.tree import (
     EventField,
     Expr,
     InState,
+    Invalid,
     ListOf,
     Name,
     Raise,
     Send,
+    StartsWith,
     System,
     Unary,
     Value,
@@ -110,6 +112,8 @@ def to_text(expr: Expr) -> str:
             return expr.name
         case InState():
             return f"In({_const_text(expr.state)})"
+        case Invalid():
+            return f"invalid({_const_text(expr.location)})"
         case ListOf():
             return "[" + ", ".join(to_text(i) for i in expr.items) + "]"
         case Attr():
@@ -118,6 +122,8 @@ def to_text(expr: Expr) -> str:
             return _unary_text(expr)
         case Binary():
             return _binary_text(expr)
+        case StartsWith():
+            return f"startswith({to_text(expr.text)}, {to_text(expr.prefix)})"
         case Else():
             return "else"
         case _:
@@ -186,6 +192,8 @@ def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:
             return expr.name  # the SCXML datamodel's own system variables
         case InState():
             return f"In({_js_string(expr.state)})"
+        case Invalid():  # throws: Qt SCXML raises error.execution
+            return f"$sg.invalid({_js_string(expr.location)})"
         case ListOf():
             return "[" + ", ".join(to_ecmascript(i, name) for i in expr.items) + "]"
         case Attr() if expr.obj == _EVENT:
@@ -199,6 +207,9 @@ def to_ecmascript(expr: Expr, name: Callable[[str], str] = _identity) -> str:
             return f"({op}{to_ecmascript(expr.operand, name)})"
         case Binary():
             return _js_binary(expr, name)
+        case StartsWith():  # `$sg.startswith`: both strings, else it throws (error.execution)
+            text, prefix = to_ecmascript(expr.text, name), to_ecmascript(expr.prefix, name)
+            return f"$sg.startswith({text}, {prefix})"
         case Else():
             return "true"
         case _:
@@ -233,6 +244,8 @@ def to_python(expr: Expr, name: Callable[[str], str], event_field: Callable[[str
             return f"ctx.system({expr.name!r})"
         case InState():
             return f"ctx.is_active({expr.state!r})"
+        case Invalid():  # raises: error.execution
+            return f"ctx.invalid({expr.location!r})"
         case ListOf():
             return "[" + ", ".join(to_python(i, name, event_field) for i in expr.items) + "]"
         case Attr():
@@ -243,6 +256,9 @@ def to_python(expr: Expr, name: Callable[[str], str], event_field: Callable[[str
         case Binary():
             left = to_python(expr.left, name, event_field)
             return f"({left} {expr.op} {to_python(expr.right, name, event_field)})"
+        case StartsWith():  # both strings, else it raises (error.execution)
+            text = to_python(expr.text, name, event_field)
+            return f"ctx.startswith({text}, {to_python(expr.prefix, name, event_field)})"
         case Else():
             return "True"
         case _:

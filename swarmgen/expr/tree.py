@@ -159,6 +159,22 @@ class InState(_Model):
     state: Annotated[str, AfterValidator(_state_name)]
 
 
+def _location_text(value: str) -> str:
+    if not value or not value.isprintable() or len(value) > 200:
+        raise ValueError("a location is 1 to 200 printable characters")
+    return value
+
+
+class Invalid(_Model):
+    """``invalid("foo.bar")``: a location the document never declares, or text that is no
+    location (an SCXML document's reference, kept as written): reading it, or assigning it,
+    fails when it runs, W3C's error.execution (5.4, 5.9, 6.4), as the SCXML reader reads a
+    document whose data the datamodel checks only then (docs/scxml-input.md)."""
+
+    kind: Literal["invalid"] = "invalid"
+    location: Annotated[str, AfterValidator(_location_text)]
+
+
 class Attr(_Model):
     """``obj.name`` where obj is a name, an event field or another attribute access."""
 
@@ -191,6 +207,15 @@ class Binary(_Model):
     right: Operand
 
 
+class StartsWith(_Model):
+    """``startswith(text, prefix)``: whether the string `text` begins with the string `prefix`
+    (both strings: another value is an error when it runs, error.execution)."""
+
+    kind: Literal["startswith"] = "startswith"
+    text: Operand
+    prefix: Operand
+
+
 class Else(_Model):
     """UML's ``else`` guard: true when no other guard of the choice holds."""
 
@@ -198,7 +223,18 @@ class Else(_Model):
 
 
 Expr = Annotated[
-    Const | Name | EventField | System | InState | ListOf | Attr | Unary | Binary | Else,
+    Const
+    | Name
+    | EventField
+    | System
+    | InState
+    | Invalid
+    | ListOf
+    | Attr
+    | Unary
+    | Binary
+    | StartsWith
+    | Else,
     Field(discriminator="kind"),
 ]
 Operand = Annotated[Expr, AfterValidator(_not_else)]
@@ -228,11 +264,12 @@ Location = Annotated[str, AfterValidator(_location)]
 
 
 class Assign(_Model):
-    """``name = expr``: set a member data item. To a system variable (`_sessionid = e`) it
-    sets nothing and raises error.execution when it runs (W3C 5.10: they are read-only)."""
+    """``name = expr``: set a member data item. To a system variable (`_sessionid = e`) or an
+    invalid location (`invalid("x") = e`) it sets nothing and raises error.execution when it
+    runs (W3C 5.10: system variables are read-only; 5.4: a location that is none)."""
 
     kind: Literal["assign"] = "assign"
-    target: Location
+    target: Location | Invalid
     value: Operand
 
 
@@ -379,6 +416,8 @@ def _children(e: Expr) -> tuple[Expr, ...]:
         return (e.operand,)
     if isinstance(e, Binary):
         return (e.left, e.right)
+    if isinstance(e, StartsWith):
+        return (e.text, e.prefix)
     return ()
 
 
@@ -413,6 +452,8 @@ def replace_fields(expr: Expr, names: dict[str, str]) -> Expr:
         if left is expr.left and right is expr.right:
             return expr
         return Binary(op=expr.op, left=left, right=right)
+    if isinstance(expr, StartsWith):
+        return _operands(expr, lambda e: replace_fields(e, names))
     return expr
 
 
@@ -434,6 +475,8 @@ def resolve_enums(expr: Expr, enums: Collection[str]) -> Expr:
         if left is expr.left and right is expr.right:
             return expr
         return Binary(op=expr.op, left=left, right=right)
+    if isinstance(expr, StartsWith):
+        return _operands(expr, lambda e: resolve_enums(e, enums))
     return expr
 
 
@@ -593,7 +636,17 @@ def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
         if left is expr.left and right is expr.right:
             return expr
         return Binary(op=expr.op, left=left, right=right)
+    if isinstance(expr, StartsWith):
+        return _operands(expr, lambda e: resolve_states(e, ids))
     return expr
+
+
+def _operands(expr: StartsWith, rewrite: Callable[[Expr], Expr]) -> StartsWith:
+    """`startswith` with `rewrite` applied to its operands (itself when neither changes)."""
+    text, prefix = rewrite(expr.text), rewrite(expr.prefix)
+    if text is expr.text and prefix is expr.prefix:
+        return expr
+    return StartsWith(text=text, prefix=prefix)
 
 
 def _items(expr: ListOf, rewrite: Callable[[Expr], Expr]) -> ListOf:

@@ -18,7 +18,7 @@ from swarmgen.diagnostics import Diagnostic, Severity
 from swarmgen.frontend import scxml_cpswarm, scxml_invoke
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError
-from swarmgen.frontend.scxml_actions import Actions
+from swarmgen.frontend.scxml_actions import Actions, namelist_field
 from swarmgen.frontend.scxml_expr import ExprUnsupported, json_fields, literal
 from swarmgen.frontend.scxml_raw import PRIMITIVES, Builder, children, in_scxml, in_sg, local, sg
 from swarmgen.frontend.scxml_src import inline_src
@@ -70,6 +70,13 @@ class _Document:
         self.folder, self.depth = folder, depth  # where `src` is read; documents above it
         self.invoked = read if read is not None else [0]  # invoked documents read in all
         self.data_names: dict[str, str] = {}
+        # the data `<foreach>`es write (W3C creates them): declared wherever they are read
+        self.loop_data = {
+            str(name)
+            for loop in root.iter(f"{{{_W3C}}}foreach")
+            for name in (loop.get("item"), loop.get("index"))
+            if name
+        }
         self.setup: list[etree._Element] = []  # `<data>` whose expr is computed at the start
         self.event_names: dict[str, str] = {}  # identifier -> model name
         self.signal_events: dict[str, str] = {}  # model name -> SignalEvent id
@@ -117,6 +124,7 @@ class _Document:
             self.behaviours,
             language,
             self.declare,
+            self.declared,
         )
         states = States(self.b, actions, self.package, emitted=sg(root, "machine") is not None)
         states.setup = self.setup
@@ -304,6 +312,11 @@ class _Document:
             else:
                 self.b.literal(prop, "defaultValue", value, data)
 
+    def declared(self, ident: str) -> bool:
+        """Whether a `<data>` declares the datum, or a `<foreach>` of the document writes it
+        (W3C creates it: `declare`; read before or after the loop, it is the same datum)."""
+        return ident in self.data_names or ident in self.loop_data
+
     def declare(self, ident: str, node: etree._Element) -> None:
         """A datum no `<data>` declares that `<foreach>` writes (W3C creates it): untyped."""
         if ident in self.data_names or self.owner is None:
@@ -375,7 +388,9 @@ class _Document:
                     str(p.get("name", ""))
                     for p in node
                     if isinstance(p.tag, str) and local(p) == "param"
-                ] + str(node.get("namelist", "")).split()  # a namelist's data ids are fields
+                ] + [  # a namelist's data ids are fields
+                    namelist_field(n) for n in str(node.get("namelist", "")).split()
+                ]
                 params += _content_fields(node)
             for name in names:
                 if (

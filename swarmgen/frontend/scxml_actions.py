@@ -23,6 +23,11 @@ from swarmgen.frontend.scxml_expr import (
 )
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, in_sg, local
 
+# a location's root: a name, then its members (`a.b`, `a["b"]`) or nothing
+_LOCATION_ROOT = re.compile(r"\s*([A-Za-z_$][A-Za-z0-9_$]*)\s*(?:[.\[].*)?", re.DOTALL)
+# an invalid namelist entry's field: its identifier characters (`"foo` gives `foo`)
+_NOT_IDENT = re.compile(r"[^A-Za-z0-9_]")
+
 _NOT_IN_IR = {
     "elseif": "<elseif> is read only inside <if>",
     "else": "<else> is read only inside <if>",
@@ -45,6 +50,7 @@ class Actions:
     behaviours: dict[str, str]  # behaviour name -> operation id
     language: str  # "ecmascript", "null" or "swarmgen"
     declare: Callable[[str, etree._Element], None]  # a datum `<foreach>` names, if new
+    declared: Callable[[str], bool]  # whether the document declares a datum (a data id)
     timers: dict[str, int] = field(default_factory=dict)  # timer event -> delay (ms)
 
     def text(self, source: str, node: etree._Element) -> str | None:
@@ -56,6 +62,31 @@ class Actions:
         except (ExprUnsupported, expr.ExprError, ValueError) as err:
             self.b.report(
                 dg.SCXML_EXPRESSION, node, text=source[:200], why=str(err).splitlines()[0]
+            )
+            return None
+
+    def location(self, source: str, node: etree._Element) -> str | None:
+        """Model text of a location read (a `<param location>`, a namelist's entry); one that
+        is none is `invalid("...")`, error.execution when it runs (`invalid`)."""
+        return self.text(source, node) if self.is_location(source) else self.invalid(source, node)
+
+    def is_location(self, source: str) -> bool:
+        """Whether the text starts with a datum the document declares or a system variable: a
+        location if it reads (what follows its root is the expression reader's and checker's)."""
+        root = _LOCATION_ROOT.fullmatch(source)
+        ident = root.group(1) if root is not None else ""
+        return ident in expr.SYSTEM_VARIABLES or (bool(ident) and self.declared(ident))
+
+    def invalid(self, source: str, node: etree._Element) -> str | None:
+        """`invalid("...")`: a location no `<data>` declares, or text that is no location. W3C
+        raises error.execution when it is read or assigned (5.4, 5.9.2, 6.2, 6.4), where the
+        typed datamodel would refuse the document: so it stays, as written, to fail when it
+        runs (the checker's SG158 warning shows it)."""
+        try:
+            return expr.to_text(expr.Invalid(location=source.strip()))
+        except ValueError as err:
+            self.b.report(
+                dg.SCXML_EXPRESSION, node, text=source[:200], why=str(err).splitlines()[-1]
             )
             return None
 
@@ -120,7 +151,10 @@ class Actions:
                 given = (
                     param.get("expr") if param.get("expr") is not None else param.get("location")
                 )
-                value = self.text(str(given or ""), param)
+                if param.get("expr") is None:
+                    value = self.location(str(given or ""), param)
+                else:
+                    value = self.text(str(given or ""), param)
                 if value is not None:
                     fields.append(f"{param.get('name')} = {value}")
             found.append(f"done({', '.join(fields)})")
@@ -219,6 +253,9 @@ class Actions:
             text = self.text(str(value), node) if value is not None else None
             if location in expr.SYSTEM_VARIABLES:  # read-only: error.execution when it runs
                 return [f"{location} = {text}"] if text is not None else []
+            if tag == "assign" and value is not None and not self.is_location(location):
+                target = self.invalid(location, node)  # no datum: error.execution when it runs
+                return [f"{target} = {text}"] if text is not None and target is not None else []
             if value is None or not location.isidentifier():
                 self.b.report(
                     dg.SCXML_UNSUPPORTED,
@@ -370,6 +407,10 @@ class Actions:
             lines += inner
         return [*lines, "end"]
 
+    def namelist_entry(self, entry: str, node: etree._Element) -> str | None:
+        """A namelist's datum (a data id), or `invalid("...")` for one that is none."""
+        return self.name(entry) if self.is_location(entry) else self.invalid(entry, node)
+
     def cancel(self, node: etree._Element) -> list[str]:
         """`<cancel sendid>`: `cancel id` (the timer pattern's is read with its state)."""
         sendid, computed = node.get("sendid"), node.get("sendidexpr")
@@ -391,15 +432,17 @@ class Actions:
     ) -> list[str]:
         """`raise`/`send` of an event with its fields (defaults left to the emitter)."""
         fields = [
-            f"{n} = {self.name(n)}" for n in str(node.get("namelist", "")).split()
+            f"{namelist_field(n)} = {self.namelist_entry(n, node)}"
+            for n in str(node.get("namelist", "")).split()
         ]  # W3C: each named datum as a field of its name
         for param in params:
             source = str(param.get("expr", ""))
             if source.lstrip().startswith(("{", "[")):
                 continue  # a field's default, which the emitter fills in again
             if param.get("location") is not None:
-                source = str(param.get("location"))
-            value = self.text(source, param)
+                value = self.location(str(param.get("location")), param)
+            else:
+                value = self.text(source, param)
             if value is not None:
                 fields.append(f"{param.get('name')} = {value}")
         computed = node.get("eventexpr") if verb == "raise" else None
@@ -524,8 +567,6 @@ def _unread_send(node: etree._Element) -> str | None:
         return "an idlocation is a data id"
     if sendid is not None and location is not None:
         return "id and idlocation exclude each other"
-    if not all(n.isidentifier() for n in str(node.get("namelist", "")).split()):
-        return "a namelist names data ids"
     if sendid is not None and (not sendid.isidentifier() or sendid.startswith("__")):
         return "a send id is an identifier"
     return None
@@ -538,3 +579,12 @@ def _blocked(blocks: list[list[str]]) -> list[str]:
     if len(full) <= 1:
         return full[0] if full else []
     return [line for lines in full for line in ("block", *lines, "end")]
+
+
+def namelist_field(entry: str) -> str:
+    """The event field of a namelist's entry: its name, or for an entry that is no data id (an
+    invalid location, whose send fails when it runs) its identifier characters."""
+    if entry.isidentifier() and not entry.startswith("__"):
+        return entry
+    kept = _NOT_IDENT.sub("", entry).lstrip("_0123456789")
+    return kept or "invalid"

@@ -285,6 +285,18 @@ class _Parser:
             if field not in expr.EVENT_META:
                 raise ExprUnsupported("$sg.meta needs a field of _event in quotes")
             return self.postfix(expr.Attr(obj=expr.System(name="_event"), name=field))
+        if function == "startswith":  # `startswith(t, p)` as emitted
+            whole = self.level(0)
+            self.take(",")
+            prefix = self.level(0)
+            self.take(")")
+            return expr.StartsWith(text=whole, prefix=prefix)
+        if function == "invalid":  # `invalid("x")`, a location that is none, as emitted
+            kind, text = self.take()
+            self.take(")")
+            if kind != "str":
+                raise ExprUnsupported("$sg.invalid needs a location in quotes")
+            return expr.Invalid(location=_string(text))
         raise ExprUnsupported(f"$sg.{function} is only read where the emitter writes it")
 
     def event_field(self) -> expr.Expr:
@@ -323,10 +335,22 @@ class _Parser:
 
     def postfix(self, found: expr.Expr) -> expr.Expr:
         while self.peek() in (".", "["):
+            if self.toks[self.at + 1 : self.at + 3] == [("name", "startsWith"), ("op", "(")]:
+                found = self.starts_with(found)  # ECMAScript's String.prototype.startsWith
+                continue
             found = self.member(found)
         if self.peek() == "(":
             raise ExprUnsupported("calls are not in the subset")
         return found
+
+    def starts_with(self, text: expr.Expr) -> expr.Expr:
+        """`t.startsWith(p)` (one argument): swarmgen's `startswith(t, p)`, both strings."""
+        self.take(".")
+        self.take("startsWith")
+        self.take("(")
+        prefix = self.level(0)
+        self.take(")")
+        return expr.StartsWith(text=text, prefix=prefix)
 
 
 def _string(text: str) -> str:

@@ -18,7 +18,7 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError, decoded, parse_safely, read_bounded
-from swarmgen.frontend.scxml_actions import Actions
+from swarmgen.frontend.scxml_actions import Actions, namelist_field
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, local
 
 SCXML_TYPES = frozenset({"http://www.w3.org/TR/scxml/", "http://www.w3.org/TR/scxml", "scxml"})
@@ -124,10 +124,6 @@ class Invokes:
             why = "id and idlocation exclude each other"
             self.b.report(dg.SCXML_INVOKE, node, "attribute", attribute="idlocation", why=why)
             return False
-        if not all(n.isidentifier() for n in str(node.get("namelist", "")).split()):
-            why = "a namelist names data ids"
-            self.b.report(dg.SCXML_INVOKE, node, "attribute", attribute="namelist", why=why)
-            return False
         if node.get("type") is not None and node.get("typeexpr") is not None:
             why = "type and typeexpr exclude each other"
             self.b.report(dg.SCXML_INVOKE, node, "attribute", attribute="typeexpr", why=why)
@@ -137,8 +133,10 @@ class Invokes:
     def _params(self, node: etree._Element, element: RawElement) -> None:
         """namelist names and `<param name expr|location>`s: the child's data they set."""
         for ident in str(node.get("namelist", "")).split():
-            name = self.actions.name(ident)
-            self.b.make("param", "", element, node, {"name": ident, "value": name})
+            name = self.actions.namelist_entry(ident, node)  # one that is none: invalid("...")
+            if name is not None:
+                field = namelist_field(ident)
+                self.b.make("param", "", element, node, {"name": field, "value": name})
         for param in children(node, "param"):
             source = param.get("expr") or param.get("location")
             given = param.get("name")
@@ -146,7 +144,10 @@ class Invokes:
                 why = "a <param> needs a name and an expr or a location"
                 self.b.report(dg.SCXML_INVOKE, param, "attribute", attribute="param", why=why)
                 continue
-            text = self.actions.text(str(source), param)
+            if param.get("expr"):
+                text = self.actions.text(str(source), param)
+            else:
+                text = self.actions.location(str(source), param)
             if text is not None:
                 self.b.make("param", "", element, param, {"name": str(given), "value": text})
 

@@ -29,7 +29,9 @@ def action_text(action: expr.Action) -> str:
     """An effect in the model's action language."""
     match action:
         case expr.Assign():
-            return f"{action.target} = {expr.to_text(action.value)}"
+            target = action.target
+            shown = expr.to_text(target) if isinstance(target, expr.Invalid) else target
+            return f"{shown} = {expr.to_text(action.value)}"
         case expr.Raise() | expr.Send():
             verb = "raise" if isinstance(action, expr.Raise) else "send"
             args = f"({_args_text(action.args)})" if action.args else ""

@@ -22,8 +22,12 @@ from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX
 from swarmgen.scxml.support import (
     CONTENT_SCRIPT,
     DELAY_SCRIPT,
+    INVALID_CALL,
+    INVALID_SCRIPT,
     META_SCRIPT,
     SPIN,
+    STARTS_CALL,
+    STARTS_SCRIPT,
     STEP_SCRIPT,
     SUPPORT_SCRIPT,
     TICK,
@@ -83,15 +87,22 @@ def _document(chart: c.Chart) -> etree._Element:
     writer.datamodel(scxml, chart.data)
     delays = any(_computed_delay(a) for n in chart.walk() for a in c.flat(_actions_of(n)))
     meta = any(_reads_event_fields(e) for n in chart.walk() for e in _expressions_of(n))
-    _sub(scxml, "script").text = (
+    script = _sub(scxml, "script")
+    for node in chart.children:
+        writer.node(scxml, node)
+    # `$sg.invalid` and `$sg.startswith` may stand in any expression the writer wrote
+    written = [v for e in scxml.iter() for v in e.attrib.values()]
+    invalid = any(INVALID_CALL in v for v in written)
+    starts = any(STARTS_CALL in v for v in written)
+    script.text = (
         SUPPORT_SCRIPT
         + (STEP_SCRIPT if bounded else "")
         + (DELAY_SCRIPT if delays else "")
         + (META_SCRIPT if meta else "")
         + (CONTENT_SCRIPT if _sends_content(chart) else "")
+        + (INVALID_SCRIPT if invalid else "")
+        + (STARTS_SCRIPT if starts else "")
     )
-    for node in chart.children:
-        writer.node(scxml, node)
     _metadata(scxml, chart)
     return scxml
 

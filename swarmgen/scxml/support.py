@@ -125,5 +125,23 @@ if ($sg.meta !== undefined) {
   };
 }
 """
+# A location the document reads that is none (`invalid("x")`, only in a document that has one:
+# an SCXML input's undeclared reference): it throws, so Qt SCXML raises error.execution as the
+# engine does (`runtime.chart.Context.invalid`, W3C 5.4, 5.9, 6.4).
+INVALID_SCRIPT = """
+$sg.invalid = function (l) { throw new ReferenceError(l + " is not a valid location"); };
+"""
+INVALID_CALL = "$sg.invalid("
+# `startswith(text, prefix)` (only in a document that has one): both strings, else it throws
+# (error.execution), as the engine's `Context.startswith`.
+STARTS_SCRIPT = """
+$sg.startswith = function (t, p) {
+  if (typeof t !== "string" || typeof p !== "string") {
+    throw new TypeError("startswith takes strings");
+  }
+  return t.substring(0, p.length) === p;
+};
+"""
+STARTS_CALL = "$sg.startswith("
 TICK = "$sg.tick(_event)"
 SPIN = "$sg.spin()"

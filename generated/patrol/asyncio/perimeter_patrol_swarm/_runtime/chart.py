@@ -241,6 +241,20 @@ class Context:
         fails: the engine raises error.execution and the rest of the block is skipped."""
         raise AttributeError(f"the system variable {name} is read-only")
 
+    def invalid(self, location: str) -> Any:
+        """`invalid("x")`: a location an SCXML document reads or assigns that is none (no
+        datum declares it, or the text is no location): W3C 5.4, 5.9, 6.4 raise error.execution
+        when it runs, so the engine does and the rest of the block is skipped."""
+        raise LookupError(f"{location!r} is not a valid location")
+
+    @staticmethod
+    def startswith(text: Any, prefix: Any) -> bool:
+        """`startswith(text, prefix)`: both strings, else an error (error.execution), as the
+        SCXML document's `$sg.startswith`."""
+        if not isinstance(text, str) or not isinstance(prefix, str):
+            raise TypeError(f"startswith takes strings, not {text!r} and {prefix!r}")
+        return text.startswith(prefix)
+
     def is_active(self, node_id: str) -> bool:
         """`In(state)`: whether the state is active."""
         return bool(self._engine.is_active(node_id))
