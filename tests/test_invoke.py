@@ -141,6 +141,9 @@ def test_a_session_that_invokes_itself_is_bounded_when_read(tmp_path: Path) -> N
     nested = [d for d in found if "nest deeper than 8" in d.message]
     assert [d.code.id for d in nested] == ["SG070"], found
     assert nested[0].span.line == 1 and nested[0].span.file.endswith("again.scxml")
+    compiled = run_cli("compile", str(source), "-o", str(tmp_path / "out"))
+    assert compiled.returncode == 2 and "SG070" in compiled.stdout + compiled.stderr
+    assert not (tmp_path / "out").exists()  # nothing written
 
 
 # (a namelist entry that is no datum, `&quot;x`, is no error: W3C 6.4 cancels the invoke with

@@ -19,6 +19,18 @@ Modules of the package import one another directly, never through this file.
 from swarmgen.expr.errors import ExprError
 from swarmgen.expr.parse import parse_bindings, parse_expr
 from swarmgen.expr.render import event_text, js_string, to_ecmascript, to_python, to_text
+from swarmgen.expr.rewrite import (
+    action_exprs,
+    event_fields,
+    free_names,
+    in_states,
+    map_action,
+    replace_fields,
+    resolve_action_enums,
+    resolve_enums,
+    resolve_states,
+    walk,
+)
 from swarmgen.expr.statements import parse_actions
 from swarmgen.expr.tree import (
     EVENT_META,
@@ -55,17 +67,7 @@ from swarmgen.expr.tree import (
     System,
     Unary,
     Value,
-    action_exprs,
-    event_fields,
     flat,
-    free_names,
-    in_states,
-    map_action,
-    replace_fields,
-    resolve_action_enums,
-    resolve_enums,
-    resolve_states,
-    walk,
 )
 
 __all__ = [

@@ -18,9 +18,10 @@ from swarmgen.diagnostics import Diagnostic, Severity
 from swarmgen.frontend import scxml_cpswarm, scxml_invoke
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError
-from swarmgen.frontend.scxml_actions import Actions, namelist_field
+from swarmgen.frontend.scxml_actions import Actions
 from swarmgen.frontend.scxml_expr import ExprUnsupported, json_fields, literal
 from swarmgen.frontend.scxml_raw import PRIMITIVES, Builder, children, in_scxml, in_sg, local, sg
+from swarmgen.frontend.scxml_send import namelist_field
 from swarmgen.frontend.scxml_src import inline_src
 from swarmgen.frontend.scxml_states import States
 

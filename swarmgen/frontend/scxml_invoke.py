@@ -18,8 +18,9 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen.frontend.raw import RawElement, RawModel
 from swarmgen.frontend.safexml import InputError, decoded, parse_safely, read_bounded
-from swarmgen.frontend.scxml_actions import Actions, namelist_field
+from swarmgen.frontend.scxml_actions import Actions
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, local
+from swarmgen.frontend.scxml_send import namelist_field
 
 SCXML_TYPES = frozenset({"http://www.w3.org/TR/scxml/", "http://www.w3.org/TR/scxml", "scxml"})
 MAX_NESTING = 8  # documents invoked inside invoked documents, when read

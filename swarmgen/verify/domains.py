@@ -26,8 +26,8 @@ import math
 from collections.abc import Iterator, Mapping, Sequence
 from typing import Any
 
+from swarmgen.expr.rewrite import walk as walk_expr
 from swarmgen.expr.tree import COMPARISONS, Attr, Binary, Const, EventField, Expr, Name, Unary
-from swarmgen.expr.tree import walk as walk_expr
 from swarmgen.ir.nodes import Model
 from swarmgen.runtime.chart import Chart, record, zero_like
 from swarmgen.verify.kinds import Outcome
