@@ -65,9 +65,12 @@ def distinct(index: I64, stamp: NDArray[np.int32]) -> I64:
     """The distinct values of `index`, in O(n) with a scratch array as large as the index
     space: every position writes its number, the positions whose number survived are one per
     value."""
+    # numpy scatters and gathers fastest with native (intp) indices, and `np.compress` picks
+    # by a scattered mask several times faster than boolean indexing (same values, same order)
+    at = index.astype(np.intp, copy=False)
     order = np.arange(len(index), dtype=np.int32)
-    stamp[index] = order
-    distinct: I64 = index[stamp[index] == order]
+    stamp[at] = order
+    distinct: I64 = np.compress(np.take(stamp, at) == order, index)
     return distinct
 
 
