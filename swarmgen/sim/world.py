@@ -58,6 +58,8 @@ from swarmgen.sim.targets import CLAIMED, FOUND, RESCUED, UNFOUND, Targets
 
 __all__ = ["CLAIMED", "FOUND", "RESCUED", "UNFOUND", "World"]
 
+_NEXT = np.array([[0.0], [1.0]])  # a step count and the one after it, as rows
+
 
 class World(Targets):
     """Bodies, coverage and targets of `runs` repetitions; see the module docstring."""
@@ -182,12 +184,14 @@ class World(Targets):
             nx = np.where(dx > 0, self.W - ox, -ox) / dx  # dx == 0: +-inf or nan
             ny = np.where(dy > 0, self.H - oy, -oy) / dy
         limit = np.fmin(np.where(dx == 0, big, nx), np.where(dy == 0, big, ny))
-        n: I64 = np.clip(limit, 0, big).astype(np.int64)  # >= 0: truncation is floor
+        # clip's bounds (never NaN here), as two ufuncs: np.clip costs more per call
+        n: I64 = np.minimum(np.maximum(limit, 0.0), big).astype(np.int64)  # >= 0: floor
         for _ in range(4):
-            steps = n.astype(np.float64)
-            out = (n > 0) & ~self._inside(ox + steps * dx, oy + steps * dy)
-            steps += 1.0
-            more = ~out & self._inside(ox + steps * dx, oy + steps * dy)
+            # steps n and n + 1 at once (rows 0 and 1), with the position expression itself
+            steps = n.astype(np.float64) + _NEXT
+            inside = self._inside(ox + steps * dx, oy + steps * dy)
+            out = (n > 0) & ~inside[0]
+            more = ~out & inside[1]
             if not (out.any() or more.any()):
                 break
             n -= out
@@ -249,19 +253,21 @@ class World(Targets):
         oy = body[:, 1] + steps * body[:, 3]
         body[:, 0], body[:, 1] = ox, oy
         todo = np.arange(len(g))
-        gt = g
-        for _ in range(16):  # candidates in blocks; the first that keeps the body inside wins
+        gt, oxt, oyt = g, ox, oy  # those still to turn (all of them in the first block)
+        for block in range(16):  # candidates in blocks; the first that keeps the body inside wins
             angle = (2.0 * math.pi) * self.uniforms(gt, BLOCK)
             cx, cy = np.cos(angle), np.sin(angle)
-            cx += ox[todo, None]
-            cy += oy[todo, None]
+            cx += oxt[:, None]
+            cy += oyt[:, None]
             ok = self._inside(cx, cy)
             pick = np.argmax(ok, axis=1)
-            found = ok[np.arange(len(todo)), pick]
+            at = np.arange(len(todo))
+            found = ok[at, pick]
             used = pick + 1  # only the draws up to the chosen one are used
             if found.all():  # the usual case: no row to select
-                chosen = angle[np.arange(len(todo)), pick]
-                body[todo, 2], body[todo, 3] = np.cos(chosen), np.sin(chosen)
+                chosen = angle[at, pick]
+                rows_left = slice(None) if block == 0 else todo
+                body[rows_left, 2], body[rows_left, 3] = np.cos(chosen), np.sin(chosen)
                 self.consume(gt, used)
                 break
             rows = np.flatnonzero(found)
@@ -271,7 +277,7 @@ class World(Targets):
             used[~found] = BLOCK
             self.consume(gt, used)
             todo = todo[~found]
-            gt = g[todo]
+            gt, oxt, oyt = g[todo], ox[todo], oy[todo]
         else:  # vanishingly unlikely: head for the centre
             cx = self.W / 2 - ox[todo]
             cy = self.H / 2 - oy[todo]
