@@ -140,7 +140,10 @@ class World(Targets):
         seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
         seen[:, self.v : self.v + self.H, self.v : self.v + self.W] = 0
         self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
-        self.covered: I64 = np.zeros(runs, dtype=np.int64)
+        self._covered: I64 = np.zeros(runs, dtype=np.int64)
+        # members that began covering (member, tick, padded patch) whose patch is not recorded
+        # yet: recorded together when coverage is next read or moved (`_flush`)
+        self._starts: list[tuple[int, int, int]] = []
         self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
         self._view_offsets = []  # per sight class: its view around a patch, in the padded grid
         for v in self.views:
@@ -224,8 +227,7 @@ class World(Targets):
             self._longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g])[0]
         )
         ix, iy = int(self.ox[member]), int(self.oy[member])
-        cell = int(self.cell(int(self.run_of[member]), ix, iy))
-        self._commit(Points.single(g, tick, cell, self.dummy))
+        self._starts.append((member, tick, int(self.cell(int(self.run_of[member]), ix, iy))))
         if self.detects(member):
             return self.targets_in_view(member, ix, iy)
         return []
@@ -376,6 +378,7 @@ class World(Targets):
         """Move every covering member of run r from tick now[r] to horizon[r], or only to the
         first tick at which one of them (detecting) has an unfound target in view. Returns that
         end tick per run and the finds there: (run, member, x patch, y patch), member order."""
+        self._flush()
         end = horizon.copy()
         movers = np.flatnonzero(self.moving)
         runs = self.run_of[movers]
@@ -418,6 +421,22 @@ class World(Targets):
         return near
 
     # --- coverage and targets
+
+    @property
+    def covered(self) -> I64:
+        """Patches seen so far, per run (the starts not yet recorded included)."""
+        self._flush()
+        return self._covered
+
+    def _flush(self) -> None:
+        """Record the patches members began covering on, all at once: a start's whole view is
+        seen at its tick whether it is recorded alone or with others (`first` keeps the
+        minimum, the seen set is a set), and nothing reads coverage before this."""
+        if not self._starts:
+            return
+        members, ticks, cells = zip(*self._starts, strict=True)
+        self._starts.clear()
+        self._commit(Points.starts(members, ticks, cells, self.dummy))
 
     def _commit(self, points: Points) -> None:
         """Record the patches members stood on, per sight class (`_commit_sight`)."""
@@ -462,11 +481,12 @@ class World(Targets):
         around = np.compress(np.take(self.seen_flag, around) == 0, around)
         fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh.astype(np.intp, copy=False)] = 1
-        self.covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own
+        self._covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own
 
     def seen_times(self, run: int) -> NDArray[np.int32]:
         """When each patch of a run was first seen (INF: never), as a (height, width) grid: the
         minimum, over the sight classes, of their `first` over their view around each patch."""
+        self._flush()
         seen = np.full((self.H, self.W), INF, dtype=np.int32)
         for k, v in enumerate(self.views):
             first = self.first[k].reshape(self.runs, self.PH, self.PW)[run]  # padding: INF
