@@ -18,6 +18,7 @@ from swarmgen.sim.scenario import Scenario
 from swarmgen.sim.sweep import Simulation, simulate
 
 if TYPE_CHECKING:
+    from swarmgen.pipeline import Validation
     from swarmgen.sim.executors import Executor
 
 
@@ -90,15 +91,17 @@ def simulate_model(
     *,
     variants: Sequence[Variant] | None = None,
     executor: Executor | None = None,
+    validation: Validation | None = None,
 ) -> tuple[Simulation, dict[str, bytes]]:
     """`swarmgen simulate`: compile MODEL, run the scenario's sweep (each of `variants`, the
     points of `--param`/`--sweep`, if given) through `executor` (default: `workers` local
     processes), write the results (and with `record`, one bag per run into that new
-    directory). Without `out_dir` the files returned leave out the figures."""
+    directory). Without `out_dir` the files returned leave out the figures. `validation`:
+    MODEL's, when the caller has already validated it."""
     if out_dir is not None:
         outtree.preflight(out_dir, "simulate")  # a bad -o is refused before the runs, not after
     datas = data_overrides(variants) if variants else [{}]
-    compiled = compile_variants(model, datas)
+    compiled = compile_variants(model, datas, validation)
     points = [
         (compiled[datas.index(v.data)], v.scenario, v.columns()) for v in variants or ()
     ] or None
