@@ -151,15 +151,14 @@ def entering(
     # indexing (the same values, in the same order)
     at_cols, at_straight, at_corner = (np.compress(m, now) for m in (cols, straight, corner))
     # a diagonal step's row: the span less the corner at dx * v (-v .. v-1, or -v+1 .. v)
-    corner_dx = np.compress(corner, dx)
-    shifted = at_corner + np.compress(corner, dy) * (v * pw) + (corner_dx < 0)
+    shifted = at_corner + np.compress(corner, dy) * (v * pw) + (np.compress(corner, dx) < 0)
+    column = at_cols + np.compress(cols, dx) * v  # the column's middle patch
+    row = at_straight + np.compress(straight, dy) * (v * pw)  # the row's middle patch
     return np.concatenate(
         [
             (np.compress(full, now)[:, None] + view_offsets[None, :]).reshape(-1),
-            ((at_cols + np.compress(cols, dx) * v)[:, None] + (span * pw)[None, :]).reshape(-1),
-            ((at_straight + np.compress(straight, dy) * (v * pw))[:, None] + span[None, :]).reshape(
-                -1
-            ),
+            (column[:, None] + (span * pw)[None, :]).reshape(-1),
+            (row[:, None] + span[None, :]).reshape(-1),
             (shifted[:, None] + span[None, :-1]).reshape(-1),
         ]
     )
