@@ -75,3 +75,18 @@ def test_a_target_is_found_by_the_view_that_holds_it() -> None:
             assert w.targets_in_view(0, finds[0][2], finds[0][3]) == [0]
         else:
             assert finds == [] and list(end) == [12, 12]
+
+
+def test_starts_recorded_together_or_one_by_one_see_the_same() -> None:
+    """Members that begin covering are recorded when coverage is next read or moved (a batch's
+    starts of one tick at once): the same seen times and counts as recording each at once."""
+    together, apart = world([0, 2], [0, 1], []), world([0, 2], [0, 1], [])
+    for g in range(len(together.moving)):
+        together.start_covering(g, 3 * g, reports=False)
+        apart.start_covering(g, 3 * g, reports=False)
+        assert apart.covered.sum() > 0  # read: recorded now
+    for w in (together, apart):
+        w.advance(np.full(len(KEYS), 9, dtype=np.int64), np.full(len(KEYS), 60, dtype=np.int64))
+    for run in range(len(KEYS)):
+        assert np.array_equal(together.seen_times(run), apart.seen_times(run))
+        assert together.covered[run] == apart.covered[run] > 0

@@ -107,6 +107,10 @@ def test_rescue_follows_search(sar_machines: Machines) -> None:
     one = [kth(r.found, 1.0, 4) or 0 for r in result.runs if r.config == 0]
     four = [kth(r.found, 1.0, 4) or 0 for r in result.runs if r.config == 1]
     assert statistics.fmean(four) < statistics.fmean(one)
+    # without -o the command prints tables only: the same files, the figures left out
+    tables = outputs(result, figures=False)
+    assert {"coverage.png", "coverage.svg", "sar.png", "sar.svg"} <= set(summary)
+    assert tables == {k: v for k, v in summary.items() if not k.endswith((".png", ".svg"))}
 
 
 # --- reproducibility --------------------------------------------------------------------------

@@ -14,6 +14,7 @@ from swarmgen import console
 from swarmgen.commands.common import MODEL, PATH, check_record, guarded, record_options
 
 if TYPE_CHECKING:
+    from swarmgen.pipeline import Validation
     from swarmgen.sim.params import Variant
     from swarmgen.sim.scenario import Scenario
 
@@ -104,7 +105,7 @@ def simulate(
     _check_study_options(level, param, sweep_file, cluster, workers, record)
     started = time.perf_counter()
     chosen = _sweep(scenario, members, targets, reps, seed)
-    variants = _check_sweep(model, chosen, param, sweep_file)
+    variants, validation = _check_sweep(model, chosen, param, sweep_file)
     progress = _ProgressBar(started)
     if level == "detailed":
         from swarmgen.sim.detailed.main import simulate_detailed
@@ -121,7 +122,7 @@ def simulate(
         try:
             sim, files = sim_run.simulate_model(
                 model, chosen, output, workers, progress, record, storage,
-                variants=variants, executor=executor,
+                variants=variants, executor=executor, validation=validation,
             )  # fmt: skip
         finally:
             if executor is not None:
@@ -210,9 +211,10 @@ def _check_study_options(
 
 def _check_sweep(
     model: Path, chosen: Scenario, param: tuple[str, ...], sweep_file: Path | None
-) -> list[Variant] | None:
+) -> tuple[list[Variant] | None, Validation]:
     """The sweep's limits, the member types of --members and every point of --param/--sweep,
-    before anything runs (a model with errors is reported by the simulation itself)."""
+    before anything runs (a model with errors is reported by the simulation itself); and the
+    model's validation, which the simulation reuses."""
     from swarmgen import diagnostics as dg
     from swarmgen import pipeline
     from swarmgen.ir.query import composition
@@ -225,12 +227,12 @@ def _check_sweep(
     points = params.product(axes, rows) if axes or sweep_file is not None else None
     validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
-        return None if points is None else []  # refused, with its diagnostics, by the run
+        return (None if points is None else []), validation  # refused by the run
     types = [t.name for t in validation.model.member_types if t.machine]
     defaults = composition(validation.model)
     sim_scenario.check(chosen, types, defaults)
     if points is None:
-        return None
+        return None, validation
     where = console.shown(sweep_file) if sweep_file is not None else "--param"
     names = params.names_of(validation.model, validation.charts)
     variants = params.variants(chosen, points, names, where)
@@ -242,7 +244,7 @@ def _check_sweep(
             f"{runs:,} runs ({len(variants):,} sweep points): more than the limit of "
             f"{MAX_RUNS:,} (docs/simulate.md)"
         )
-    return variants
+    return variants, validation
 
 
 def _runs(chosen: Scenario, types: list[str], defaults: dict[str, int]) -> int:

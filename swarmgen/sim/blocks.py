@@ -44,7 +44,7 @@ class Blocks:
     def seen(self, padded: I64) -> NDArray[np.int64]:
         """Padded patches (flat, run included, each once) were seen for the first time;
         returns how many per run."""
-        count = np.bincount(self.of_padded[padded], minlength=len(self.dirty))
+        count = np.bincount(np.take(self.of_padded, padded), minlength=len(self.dirty))
         if padded.size:
             self.dirty -= count
             self._table = None
@@ -147,13 +147,18 @@ def entering(
     rows = ~full & (dy != 0)
     straight, corner = rows & (dx == 0), rows & (dx != 0)
     span = np.arange(-v, v + 1, dtype=now.dtype)
+    # `np.compress`: picking by these scattered masks is several times faster than boolean
+    # indexing (the same values, in the same order)
+    at_cols, at_straight, at_corner = (np.compress(m, now) for m in (cols, straight, corner))
     # a diagonal step's row: the span less the corner at dx * v (-v .. v-1, or -v+1 .. v)
-    shifted = now[corner] + dy[corner] * (v * pw) + (dx[corner] < 0)
+    shifted = at_corner + np.compress(corner, dy) * (v * pw) + (np.compress(corner, dx) < 0)
+    column = at_cols + np.compress(cols, dx) * v  # the column's middle patch
+    row = at_straight + np.compress(straight, dy) * (v * pw)  # the row's middle patch
     return np.concatenate(
         [
-            (now[full][:, None] + view_offsets[None, :]).reshape(-1),
-            ((now[cols] + dx[cols] * v)[:, None] + (span * pw)[None, :]).reshape(-1),
-            ((now[straight] + dy[straight] * (v * pw))[:, None] + span[None, :]).reshape(-1),
+            (np.compress(full, now)[:, None] + view_offsets[None, :]).reshape(-1),
+            (column[:, None] + (span * pw)[None, :]).reshape(-1),
+            (row[:, None] + span[None, :]).reshape(-1),
             (shifted[:, None] + span[None, :-1]).reshape(-1),
         ]
     )

@@ -4,6 +4,7 @@ and the patches passed in one round (`Points`); see `world` for the model they s
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -65,9 +66,12 @@ def distinct(index: I64, stamp: NDArray[np.int32]) -> I64:
     """The distinct values of `index`, in O(n) with a scratch array as large as the index
     space: every position writes its number, the positions whose number survived are one per
     value."""
+    # numpy scatters and gathers fastest with native (intp) indices, and `np.compress` picks
+    # by a scattered mask several times faster than boolean indexing (same values, same order)
+    at = index.astype(np.intp, copy=False)
     order = np.arange(len(index), dtype=np.int32)
-    stamp[index] = order
-    distinct: I64 = index[stamp[index] == order]
+    stamp[at] = order
+    distinct: I64 = np.compress(np.take(stamp, at) == order, index)
     return distinct
 
 
@@ -91,11 +95,18 @@ class Points:
         return Points(e, e, e, e.astype(np.bool_))
 
     @staticmethod
-    def single(g: I64, tick: int, flat: int, dummy: int) -> Points:
-        """One member standing on one patch at a tick."""
-        row = np.full(STRETCH, dummy, dtype=np.int64)
-        row[0] = flat
-        return Points(g, np.array([tick], dtype=np.int64), row, np.zeros(1, dtype=np.bool_))
+    def starts(
+        members: Sequence[int], ticks: Sequence[int], flats: Sequence[int], dummy: int
+    ) -> Points:
+        """Members standing on patches, each at its tick: one row each."""
+        rows = np.full((len(members), STRETCH), dummy, dtype=np.int64)
+        rows[:, 0] = flats
+        return Points(
+            np.array(members, dtype=np.int64),
+            np.array(ticks, dtype=np.int64),
+            rows.reshape(-1),
+            np.zeros(len(members), dtype=np.bool_),
+        )
 
     def __len__(self) -> int:
         return len(self.flat)

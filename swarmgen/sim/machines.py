@@ -55,14 +55,18 @@ def compile_machines(model: Path) -> Machines:
 
 
 def compile_variants(
-    model: Path, data: Sequence[Mapping[str, Mapping[str, Any]]]
+    model: Path,
+    data: Sequence[Mapping[str, Mapping[str, Any]]],
+    validation: Validation | None = None,
 ) -> list[Machines]:
     """`compile_machines` once per entry of `data` (member type -> datum -> the default it
-    starts with instead of the model's: a sweep's data parameters), validating once."""
+    starts with instead of the model's: a sweep's data parameters), validating once (or not
+    at all, given the model's `validation` already made)."""
     from swarmgen import diagnostics as dg
     from swarmgen import pipeline
 
-    validation = pipeline.validate(model)
+    if validation is None:
+        validation = pipeline.validate(model)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         raise SimulationError(dg.refusal_line(model, validation.diagnostics))
     return [machines_of(model, validation, overrides) for overrides in data]

@@ -18,11 +18,13 @@ from swarmgen.sim.scenario import Scenario
 from swarmgen.sim.sweep import Simulation, simulate
 
 if TYPE_CHECKING:
+    from swarmgen.pipeline import Validation
     from swarmgen.sim.executors import Executor
 
 
-def outputs(sim: Simulation) -> dict[str, bytes]:
-    """The result files: tables (CSV), everything as JSON, and the figures (PNG, SVG)."""
+def outputs(sim: Simulation, figures: bool = True) -> dict[str, bytes]:
+    """The result files: tables (CSV), everything as JSON, and (with `figures`) the figures
+    (PNG, SVG)."""
     import json
     from dataclasses import asdict
 
@@ -55,6 +57,8 @@ def outputs(sim: Simulation) -> dict[str, bytes]:
         "runs": [asdict(r) for r in sim.runs],
     }
     files["results.json"] = (json.dumps(payload, indent=1, sort_keys=True) + "\n").encode()
+    if not figures:
+        return files
     title = f"{sim.machines.model}: {sim.scenario.name}"
     for name, figure in (
         ("coverage", plots.coverage_figure(summary, title)),
@@ -87,15 +91,17 @@ def simulate_model(
     *,
     variants: Sequence[Variant] | None = None,
     executor: Executor | None = None,
+    validation: Validation | None = None,
 ) -> tuple[Simulation, dict[str, bytes]]:
     """`swarmgen simulate`: compile MODEL, run the scenario's sweep (each of `variants`, the
     points of `--param`/`--sweep`, if given) through `executor` (default: `workers` local
     processes), write the results (and with `record`, one bag per run into that new
-    directory)."""
+    directory). Without `out_dir` the files returned leave out the figures. `validation`:
+    MODEL's, when the caller has already validated it."""
     if out_dir is not None:
         outtree.preflight(out_dir, "simulate")  # a bad -o is refused before the runs, not after
     datas = data_overrides(variants) if variants else [{}]
-    compiled = compile_variants(model, datas)
+    compiled = compile_variants(model, datas, validation)
     points = [
         (compiled[datas.index(v.data)], v.scenario, v.columns()) for v in variants or ()
     ] or None
@@ -103,7 +109,9 @@ def simulate_model(
         compiled[0], scenario, workers=workers, progress=progress, record=record,
         storage=storage, points=points, executor=executor,
     )  # fmt: skip
-    files = outputs(sim)
+    # without -o only the tables are printed: drawing the figures (matplotlib, about a second
+    # with its import) would be wasted
+    files = outputs(sim, figures=out_dir is not None)
     if out_dir is not None:
         write_outputs(files, out_dir, model.name)
     return sim, files

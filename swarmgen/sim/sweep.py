@@ -12,6 +12,7 @@ from typing import Any
 
 from swarmgen.sim.batch import Batch, Config, RunResult
 from swarmgen.sim.executors import Executor, Failure, LocalExecutor
+from swarmgen.sim.heap import kept_heap
 from swarmgen.sim.machines import Machines, build_chart
 from swarmgen.sim.scenario import Scenario, SimulationError
 
@@ -165,7 +166,9 @@ def simulate(
         for owner, _ in owners:  # built once here: forked workers inherit the charts
             for machine in owner.members:
                 build_chart(machine)
-    outcomes = chosen.map(run_jobs, tasks, [sum(len(j.reps) for j in t) for t in tasks], finished)
+    sizes = [sum(len(j.reps) for j in t) for t in tasks]
+    with kept_heap():  # here and in forked workers: rounds reuse their temporaries' pages
+        outcomes = chosen.map(run_jobs, tasks, sizes, finished)
     results: list[RunResult] = []
     for task, outcome in zip(tasks, outcomes, strict=True):
         if isinstance(outcome, Failure):

@@ -58,6 +58,8 @@ from swarmgen.sim.targets import CLAIMED, FOUND, RESCUED, UNFOUND, Targets
 
 __all__ = ["CLAIMED", "FOUND", "RESCUED", "UNFOUND", "World"]
 
+_NEXT = np.array([[0.0], [1.0]])  # a step count and the one after it, as rows
+
 
 class World(Targets):
     """Bodies, coverage and targets of `runs` repetitions; see the module docstring."""
@@ -138,7 +140,10 @@ class World(Targets):
         seen = np.ones((runs, self.PH, self.PW), dtype=np.uint8)  # the padding counts as seen
         seen[:, self.v : self.v + self.H, self.v : self.v + self.W] = 0
         self.seen_flag: NDArray[np.uint8] = seen.reshape(-1)
-        self.covered: I64 = np.zeros(runs, dtype=np.int64)
+        self._covered: I64 = np.zeros(runs, dtype=np.int64)
+        # members that began covering (member, tick, padded patch) whose patch is not recorded
+        # yet: recorded together when coverage is next read or moved (`_flush`)
+        self._starts: list[tuple[int, int, int]] = []
         self._stamp_seen: NDArray[np.int32] = np.zeros(runs * self.PWH, dtype=np.int32)
         self._view_offsets = []  # per sight class: its view around a patch, in the padded grid
         for v in self.views:
@@ -182,12 +187,14 @@ class World(Targets):
             nx = np.where(dx > 0, self.W - ox, -ox) / dx  # dx == 0: +-inf or nan
             ny = np.where(dy > 0, self.H - oy, -oy) / dy
         limit = np.fmin(np.where(dx == 0, big, nx), np.where(dy == 0, big, ny))
-        n: I64 = np.clip(limit, 0, big).astype(np.int64)  # >= 0: truncation is floor
+        # clip's bounds (never NaN here), as two ufuncs: np.clip costs more per call
+        n: I64 = np.minimum(np.maximum(limit, 0.0), big).astype(np.int64)  # >= 0: floor
         for _ in range(4):
-            steps = n.astype(np.float64)
-            out = (n > 0) & ~self._inside(ox + steps * dx, oy + steps * dy)
-            steps += 1.0
-            more = ~out & self._inside(ox + steps * dx, oy + steps * dy)
+            # steps n and n + 1 at once (rows 0 and 1), with the position expression itself
+            steps = n.astype(np.float64) + _NEXT
+            inside = self._inside(ox + steps * dx, oy + steps * dy)
+            out = (n > 0) & ~inside[0]
+            more = ~out & inside[1]
             if not (out.any() or more.any()):
                 break
             n -= out
@@ -220,8 +227,7 @@ class World(Targets):
             self._longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g])[0]
         )
         ix, iy = int(self.ox[member]), int(self.oy[member])
-        cell = int(self.cell(int(self.run_of[member]), ix, iy))
-        self._commit(Points.single(g, tick, cell, self.dummy))
+        self._starts.append((member, tick, int(self.cell(int(self.run_of[member]), ix, iy))))
         if self.detects(member):
             return self.targets_in_view(member, ix, iy)
         return []
@@ -249,19 +255,21 @@ class World(Targets):
         oy = body[:, 1] + steps * body[:, 3]
         body[:, 0], body[:, 1] = ox, oy
         todo = np.arange(len(g))
-        gt = g
-        for _ in range(16):  # candidates in blocks; the first that keeps the body inside wins
+        gt, oxt, oyt = g, ox, oy  # those still to turn (all of them in the first block)
+        for block in range(16):  # candidates in blocks; the first that keeps the body inside wins
             angle = (2.0 * math.pi) * self.uniforms(gt, BLOCK)
             cx, cy = np.cos(angle), np.sin(angle)
-            cx += ox[todo, None]
-            cy += oy[todo, None]
+            cx += oxt[:, None]
+            cy += oyt[:, None]
             ok = self._inside(cx, cy)
             pick = np.argmax(ok, axis=1)
-            found = ok[np.arange(len(todo)), pick]
+            at = np.arange(len(todo))
+            found = ok[at, pick]
             used = pick + 1  # only the draws up to the chosen one are used
             if found.all():  # the usual case: no row to select
-                chosen = angle[np.arange(len(todo)), pick]
-                body[todo, 2], body[todo, 3] = np.cos(chosen), np.sin(chosen)
+                chosen = angle[at, pick]
+                rows_left = slice(None) if block == 0 else todo
+                body[rows_left, 2], body[rows_left, 3] = np.cos(chosen), np.sin(chosen)
                 self.consume(gt, used)
                 break
             rows = np.flatnonzero(found)
@@ -271,7 +279,7 @@ class World(Targets):
             used[~found] = BLOCK
             self.consume(gt, used)
             todo = todo[~found]
-            gt = g[todo]
+            gt, oxt, oyt = g[todo], ox[todo], oy[todo]
         else:  # vanishingly unlikely: head for the centre
             cx = self.W / 2 - ox[todo]
             cy = self.H / 2 - oy[todo]
@@ -332,7 +340,7 @@ class World(Targets):
             np.minimum(ya, yb),
             np.maximum(ya, yb),
         )
-        piece, sa, cnt = piece[keep], sa[keep], cnt[keep]
+        piece, sa, cnt = (np.compress(keep, a) for a in (piece, sa, cnt))
         if not piece.size:
             return Points.empty()
         # a row whose leg's previous stretch is the row before it (kept, so full and adjacent)
@@ -351,7 +359,7 @@ class World(Targets):
         flat *= self.PW
         flat += u.astype(self.index)
         flat += self.cell(self.run_of[gm], 0, 0).astype(self.index)[:, None]
-        flat[column[None, :] >= cnt[:, None]] = self.dummy
+        np.putmask(flat, column[None, :] >= cnt[:, None], self.dummy)
         return Points(gm, s0 + sa, flat.reshape(-1), linked)
 
     def _snapshot(self, g: I64) -> list[NDArray[np.generic]]:
@@ -370,6 +378,7 @@ class World(Targets):
         """Move every covering member of run r from tick now[r] to horizon[r], or only to the
         first tick at which one of them (detecting) has an unfound target in view. Returns that
         end tick per run and the finds there: (run, member, x patch, y patch), member order."""
+        self._flush()
         end = horizon.copy()
         movers = np.flatnonzero(self.moving)
         runs = self.run_of[movers]
@@ -413,6 +422,22 @@ class World(Targets):
 
     # --- coverage and targets
 
+    @property
+    def covered(self) -> I64:
+        """Patches seen so far, per run (the starts not yet recorded included)."""
+        self._flush()
+        return self._covered
+
+    def _flush(self) -> None:
+        """Record the patches members began covering on, all at once: a start's whole view is
+        seen at its tick whether it is recorded alone or with others (`first` keeps the
+        minimum, the seen set is a set), and nothing reads coverage before this."""
+        if not self._starts:
+            return
+        members, ticks, cells = zip(*self._starts, strict=True)
+        self._starts.clear()
+        self._commit(Points.starts(members, ticks, cells, self.dummy))
+
     def _commit(self, points: Points) -> None:
         """Record the patches members stood on, per sight class (`_commit_sight`)."""
         if len(self.views) == 1:
@@ -430,18 +455,19 @@ class World(Targets):
         if not len(points):
             return
         stood = self.stood[k]
-        new = np.flatnonzero(stood[points.flat] == 0)
+        new = np.flatnonzero(np.take(stood, points.flat) == 0)
         if not new.size:
             return
         flat = points.flat[new]
         np.minimum.at(self.first[k], flat, points.ticks(new).astype(np.int32))
         # a patch passed twice brings the same view: `distinct` below drops the repeats
-        stood[flat] = 1
+        stood[flat.astype(np.intp, copy=False)] = 1
         # each point's predecessor stands with its whole view seen (now or before): only what
         # the step adds can be new; a row's first point brings its view, unless the row before
         # it is its leg's previous stretch (the predecessor is then that row's last point)
         start = (new & (STRETCH - 1)) == 0
-        start[start] = ~points.linked[new[start] >> SHIFT]
+        firsts = np.flatnonzero(start)
+        start[firsts] = ~points.linked[new[firsts] >> SHIFT]
         around = entering(
             flat,
             points.flat[new - 1],  # at a start: another row's, unused
@@ -450,14 +476,17 @@ class World(Targets):
             self._view_offsets[k],
             self.views[k],
         )
-        around = around[self.seen_flag[around] == 0]
+        # `np.compress` and `np.take`: boolean indexing by a scattered mask is several times
+        # slower (the same values, in the same order)
+        around = np.compress(np.take(self.seen_flag, around) == 0, around)
         fresh = distinct(around, self._stamp_seen)
-        self.seen_flag[fresh] = 1
-        self.covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own
+        self.seen_flag[fresh.astype(np.intp, copy=False)] = 1
+        self._covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own
 
     def seen_times(self, run: int) -> NDArray[np.int32]:
         """When each patch of a run was first seen (INF: never), as a (height, width) grid: the
         minimum, over the sight classes, of their `first` over their view around each patch."""
+        self._flush()
         seen = np.full((self.H, self.W), INF, dtype=np.int32)
         for k, v in enumerate(self.views):
             first = self.first[k].reshape(self.runs, self.PH, self.PW)[run]  # padding: INF
