@@ -29,6 +29,18 @@ TYPED = {
     "(tests/test_system_assign.py)",
     "330": "`'name' in _event`: every event of the typed datamodel has all of W3C's fields "
     '(blank ones ""), so there is nothing to test, and the language has no `in`',
+    "216": "`<invoke srcexpr>`: the child document is named by a value computed when the "
+    "state is entered; swarmgen reads, checks and compiles every invoked document when the "
+    "parent is compiled (a generated package carries no SCXML reader or compiler, and a "
+    "document it never checked would run unchecked), so only `src` and inline `<content>` "
+    "are read",
+    "530": "the child document is the value of a datum (`<content expr>`), assigned an XML "
+    "document by `<assign>` with inline content: the typed datamodel holds no XML values, "
+    "and a document computed at run time is not compiled (as 216)",
+    "245": "it tests that a name the child never declares stays unbound (`conf:isBound`, "
+    "`typeof` in ECMAScript): the typed datamodel has no unbound names (as the `undefined` "
+    "tests above); what it tests first, that a namelist value for a name the child does not "
+    'declare sets nothing, swarmgen does (docs/semantics.md, "Invoked sessions")',
     "302": _SCRIPT,
     "303": _SCRIPT,
     "304": _SCRIPT,
