@@ -220,7 +220,8 @@ def in_states(expr: Expr) -> frozenset[str]:
 def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
     """`In(name)` with its name replaced by `ids(name)` (lowering: names to chart ids)."""
     if isinstance(expr, InState):
-        return InState(state=ids(expr.state))
+        state = ids(expr.state)
+        return expr if state == expr.state else InState(state=state)
     return _rebuild(expr, lambda e: resolve_states(e, ids))
 
 

@@ -53,7 +53,7 @@ def actions_of(
         )
         return ()
     try:
-        return tuple(expr.resolve_action_enums(a, b.enumerations) for a in expr.parse_actions(text))
+        return b.actions(text)
     except expr.ExprError as err:
         error = quote_error(text, err)
         b.diags.append(dg.EFFECT_SYNTAX.at(behaviour.span, what=what, error=error, hint=err.hint))
