@@ -25,7 +25,8 @@ _T = TypeVar("_T")
 def resolve_in_states(chart: c.Chart) -> c.Chart:
     """The chart with every `In(name)` naming its state's id."""
     nodes = chart.walk()
-    if not any(_has_in(node) or _waits_for_done(node) for node in nodes):
+    tests_in = any(_has_in(node) for node in nodes)
+    if not tests_in and not any(_waits_for_done(node) for node in nodes):
         return chart
     ids: dict[str, str] = {}
     for node in nodes:  # document order: the first of a name wins
@@ -36,7 +37,7 @@ def resolve_in_states(chart: c.Chart) -> c.Chart:
     def lookup(name: str) -> str:
         return ids.get(name, name)
 
-    return replace(chart, children=tuple(_node(n, lookup) for n in chart.children))
+    return replace(chart, children=tuple(_node(n, lookup, tests_in) for n in chart.children))
 
 
 def _waits_for_done(node: c.Node) -> bool:
@@ -74,21 +75,24 @@ def _action_exprs(action: c.Action) -> list[expr.Expr]:
     return []
 
 
-def _node(node: c.Node, lookup: Callable[[str], str]) -> c.Node:
+def _node(node: c.Node, lookup: Callable[[str], str], tests_in: bool) -> c.Node:
+    """The node with its `In()` (when the chart `tests_in` at all) and `done.state` names
+    resolved; the node itself when none of them is in it (`_replaced`)."""
+
     def fix(e: expr.Expr) -> expr.Expr:
         return expr.resolve_states(e, lookup)
 
     def actions(found: tuple[c.Action, ...]) -> tuple[c.Action, ...]:
-        return tuple(_action(a, fix) for a in found)
+        return tuple(_action(a, fix) for a in found) if tests_in else found
 
     def transition(t: c.Transition) -> c.Transition:
-        cond = fix(t.cond) if t.cond is not None else None
+        cond = fix(t.cond) if t.cond is not None and tests_in else t.cond
         events = tuple(DONE + lookup(e[len(DONE) :]) if e.startswith(DONE) else e for e in t.events)
         return _replaced(t, events=events, cond=cond, actions=actions(t.actions))
 
     return _replaced(
         node,
-        children=tuple(_node(child, lookup) for child in node.children),
+        children=tuple(_node(child, lookup, tests_in) for child in node.children),
         transitions=tuple(transition(t) for t in node.transitions),
         initial=transition(node.initial) if node.initial is not None else None,
         onentry=actions(node.onentry),
@@ -153,5 +157,5 @@ def _same(new: object, old: object) -> bool:
     if isinstance(new, str):
         return new == old
     if isinstance(new, tuple) and isinstance(old, tuple) and len(new) == len(old):
-        return all(_same(a, b) for a, b in zip(new, old, strict=True))
+        return all(a is b or _same(a, b) for a, b in zip(new, old, strict=True))
     return False

@@ -64,6 +64,7 @@ class Builder:
     # occurrence. Filled only after `enumerations` is complete; a text that fails is not kept.
     parsed_exprs: dict[str, expr.Expr] = field(default_factory=dict)
     parsed_actions: dict[str, tuple[expr.Action, ...]] = field(default_factory=dict)
+    parsed_bindings: dict[str, tuple[expr.Binding, ...]] = field(default_factory=dict)
 
     @cached_property
     def declares_events(self) -> bool:
@@ -88,6 +89,14 @@ class Builder:
             parsed = expr.parse_actions(text)
             found = tuple(expr.resolve_action_enums(a, self.enumerations) for a in parsed)
             self.parsed_actions[text] = found
+        return found
+
+    def bindings(self, text: str) -> tuple[expr.Binding, ...]:
+        """`text` parsed as argument bindings, enumeration literals resolved; raises ExprError."""
+        found = self.parsed_bindings.get(text)
+        if found is None:
+            found = tuple(_resolved(binding, self) for binding in expr.parse_bindings(text))
+            self.parsed_bindings[text] = found
         return found
 
     def stereotype(self, element: RawElement, names: Iterable[str]) -> StereotypeApplication | None:
@@ -312,3 +321,9 @@ def short(text: str, limit: int = 60) -> str:
     """Model text quoted for a message: whitespace collapsed, clipped at `limit`."""
     flat = " ".join(text.split())
     return f"'{flat[: limit - 3]}...'" if len(flat) > limit else f"'{flat}'"
+
+
+def _resolved(binding: expr.Binding, b: Builder) -> expr.Binding:
+    """The binding with its enumeration literals resolved (itself when it has none)."""
+    value = expr.resolve_enums(binding.value, b.enumerations)
+    return binding if value is binding.value else expr.Binding(name=binding.name, value=value)
