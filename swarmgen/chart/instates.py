@@ -122,7 +122,9 @@ def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action
             for p in action.params
         )
         if isinstance(action, c.Raise):
-            delay = _replaced(action.delay, amount=fix(action.delay.amount)) if action.delay else None
+            delay = (
+                _replaced(action.delay, amount=fix(action.delay.amount)) if action.delay else None
+            )
             target = fix(action.target) if action.target is not None else None
             via = fix(action.via) if action.via is not None else None
             named = fix(action.named) if action.named is not None else None

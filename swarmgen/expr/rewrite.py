@@ -224,7 +224,9 @@ def _asked(query: str, expr: Expr, answer: Callable[[Expr], frozenset[str]]) -> 
 
 def free_names(expr: Expr) -> frozenset[str]:
     """Member data names read by the expression (the root of `a.b` is `a`; no event fields)."""
-    return _asked("names", expr, lambda e: frozenset(n.name for n in walk(e) if isinstance(n, Name)))
+    return _asked(
+        "names", expr, lambda e: frozenset(n.name for n in walk(e) if isinstance(n, Name))
+    )
 
 
 def event_fields(expr: Expr) -> frozenset[str]:
