@@ -161,6 +161,9 @@ class ChartRenderer:
         # whether code rendered since the last helper function reads or writes `d`: every
         # expression is rendered right before the function that holds it
         self._reads_data = False
+        # each expression's code, and whether it reads `d`, by the expression's identity (the
+        # entry holds it): one parsed text is one object on every transition that has it
+        self._python: dict[int, tuple[expr.Expr, str, bool]] = {}
 
     def render(self) -> ChartCode:
         """The chart's helper functions and `ChartBuilder` statements, in document order."""
@@ -218,12 +221,19 @@ class ChartRenderer:
         """An expression (or an event field's default) as Python source over `d` and `ctx`."""
         if isinstance(e, c.FieldDefault):
             return py_literal(e.value)
-        return expr.to_python(
-            e,
-            name=self._data,
-            # a field the event does not carry is an error, as `$sg.field` in the SCXML
-            event_field=lambda f: f"ctx.field({identifier(f)!r})",
-        )
+        held = self._python.get(id(e))
+        if held is None or held[0] is not e:
+            reads, self._reads_data = self._reads_data, False
+            code = expr.to_python(
+                e,
+                name=self._data,
+                # a field the event does not carry is an error, as `$sg.field` in the SCXML
+                event_field=lambda f: f"ctx.field({identifier(f)!r})",
+            )
+            held = self._python[id(e)] = (e, code, self._reads_data)
+            self._reads_data = reads
+        self._reads_data = self._reads_data or held[2]
+        return held[1]
 
     def _data(self, name: str) -> str:
         """A datamodel item as code: `d['id']`."""

@@ -198,6 +198,9 @@ class _Graph:
         # ancestor's transition (read only: callers make new sets and lists from them)
         self._leaves: dict[str, list[str]] = {}
         self._assigns: dict[str, set[str]] = {}
+        # per node: (assigns, label, targets) of each transition; a compound state's are read
+        # for every leaf below it
+        self._exits: dict[str, list[tuple[set[str], str, tuple[str, ...]]]] = {}
         self.edges: dict[str, list[_Edge]] = {}
         for leaf in (n for n in nodes.values() if not n.children or n.kind == "final"):
             self.edges[leaf.id] = self._leaf_edges(leaf)
@@ -245,14 +248,25 @@ class _Graph:
                 assigned |= self._entry_assigns(target)
         return assigned
 
+    def _transitions_of(self, owner_id: str) -> list[tuple[set[str], str, tuple[str, ...]]]:
+        found = self._exits.get(owner_id)
+        if found is None:
+            owner = self.nodes[owner_id]
+            found = self._exits[owner_id] = [
+                (
+                    _assigned(transition.actions) | _outputs_written(owner, transition),
+                    " ".join(transition.events) or "(completion)",
+                    transition.targets,
+                )
+                for transition in owner.transitions
+            ]
+        return found
+
     def _leaf_edges(self, leaf: c.Node) -> list[_Edge]:
         edges = []
         for owner_id in self._ancestors(leaf.id):
-            owner = self.nodes[owner_id]
-            for transition in owner.transitions:
-                assigns = _assigned(transition.actions) | _outputs_written(owner, transition)
-                label = " ".join(transition.events) or "(completion)"
-                for target in transition.targets or (leaf.id,):
+            for assigns, label, targets in self._transitions_of(owner_id):
+                for target in targets or (leaf.id,):
                     entered = assigns | self._entry_assigns(target)
                     for next_leaf in self.entry_leaves(target):
                         edges.append(_Edge(next_leaf, frozenset(entered), label))

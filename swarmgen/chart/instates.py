@@ -12,17 +12,21 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Any, TypeVar
 
 from swarmgen import expr
 from swarmgen.chart import model as c
 
 DONE = "done.state."  # a trigger on another state's completion names the state
 
+_T = TypeVar("_T")
+
 
 def resolve_in_states(chart: c.Chart) -> c.Chart:
     """The chart with every `In(name)` naming its state's id."""
     nodes = chart.walk()
-    if not any(_has_in(node) or _waits_for_done(node) for node in nodes):
+    tests_in = any(_has_in(node) for node in nodes)
+    if not tests_in and not any(_waits_for_done(node) for node in nodes):
         return chart
     ids: dict[str, str] = {}
     for node in nodes:  # document order: the first of a name wins
@@ -33,7 +37,7 @@ def resolve_in_states(chart: c.Chart) -> c.Chart:
     def lookup(name: str) -> str:
         return ids.get(name, name)
 
-    return replace(chart, children=tuple(_node(n, lookup) for n in chart.children))
+    return replace(chart, children=tuple(_node(n, lookup, tests_in) for n in chart.children))
 
 
 def _waits_for_done(node: c.Node) -> bool:
@@ -71,21 +75,24 @@ def _action_exprs(action: c.Action) -> list[expr.Expr]:
     return []
 
 
-def _node(node: c.Node, lookup: Callable[[str], str]) -> c.Node:
+def _node(node: c.Node, lookup: Callable[[str], str], tests_in: bool) -> c.Node:
+    """The node with its `In()` (when the chart `tests_in` at all) and `done.state` names
+    resolved; the node itself when none of them is in it (`_replaced`)."""
+
     def fix(e: expr.Expr) -> expr.Expr:
         return expr.resolve_states(e, lookup)
 
     def actions(found: tuple[c.Action, ...]) -> tuple[c.Action, ...]:
-        return tuple(_action(a, fix) for a in found)
+        return tuple(_action(a, fix) for a in found) if tests_in else found
 
     def transition(t: c.Transition) -> c.Transition:
-        cond = fix(t.cond) if t.cond is not None else None
+        cond = fix(t.cond) if t.cond is not None and tests_in else t.cond
         events = tuple(DONE + lookup(e[len(DONE) :]) if e.startswith(DONE) else e for e in t.events)
-        return replace(t, events=events, cond=cond, actions=actions(t.actions))
+        return _replaced(t, events=events, cond=cond, actions=actions(t.actions))
 
-    return replace(
+    return _replaced(
         node,
-        children=tuple(_node(child, lookup) for child in node.children),
+        children=tuple(_node(child, lookup, tests_in) for child in node.children),
         transitions=tuple(transition(t) for t in node.transitions),
         initial=transition(node.initial) if node.initial is not None else None,
         onentry=actions(node.onentry),
@@ -95,32 +102,34 @@ def _node(node: c.Node, lookup: Callable[[str], str]) -> c.Node:
 
 def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action:
     if isinstance(action, c.Assign):
-        return replace(action, value=fix(action.value))
+        return _replaced(action, value=fix(action.value))
     if isinstance(action, c.If):
         branches = tuple(
             (fix(cond) if cond is not None else None, tuple(_action(a, fix) for a in inner))
             for cond, inner in action.branches
         )
-        return c.If(branches)
+        return _replaced(action, branches=branches)
     if isinstance(action, c.Log):
-        return replace(action, value=fix(action.value))
+        return _replaced(action, value=fix(action.value))
     if isinstance(action, c.Block):
-        return c.Block(tuple(_action(a, fix) for a in action.actions))
+        return _replaced(action, actions=tuple(_action(a, fix) for a in action.actions))
     if isinstance(action, c.ForEach):
         inner_actions = tuple(_action(a, fix) for a in action.actions)
-        return replace(action, array=fix(action.array), actions=inner_actions)
+        return _replaced(action, array=fix(action.array), actions=inner_actions)
     if isinstance(action, c.Raise | c.Send):
         params = tuple(
-            p if isinstance(p.value, c.FieldDefault) else replace(p, value=fix(p.value))
+            p if isinstance(p.value, c.FieldDefault) else _replaced(p, value=fix(p.value))
             for p in action.params
         )
         if isinstance(action, c.Raise):
-            delay = replace(action.delay, amount=fix(action.delay.amount)) if action.delay else None
+            delay = (
+                _replaced(action.delay, amount=fix(action.delay.amount)) if action.delay else None
+            )
             target = fix(action.target) if action.target is not None else None
             via = fix(action.via) if action.via is not None else None
             named = fix(action.named) if action.named is not None else None
             content = fix(action.content) if action.content is not None else None
-            return replace(
+            return _replaced(
                 action,
                 params=params,
                 delay=delay,
@@ -129,5 +138,26 @@ def _action(action: c.Action, fix: Callable[[expr.Expr], expr.Expr]) -> c.Action
                 named=named,
                 content=content,
             )
-        return replace(action, params=params)
+        return _replaced(action, params=params)
     return action
+
+
+def _replaced(obj: _T, **changes: Any) -> _T:
+    """`replace(obj, **changes)`, or `obj` itself when every change is what it holds already:
+    a chart with one `In()` or `done.state` would otherwise rebuild every transition and
+    action of every state (10,000 states: ~40,000 `replace` calls for nothing)."""
+    if all(_same(new, getattr(obj, name)) for name, new in changes.items()):
+        return obj
+    return replace(obj, **changes)  # type: ignore[type-var]
+
+
+def _same(new: object, old: object) -> bool:
+    """Whether a rewritten value is the one it came from: the same object, equal text, or a
+    tuple of such (the rewrites return their input itself when nothing in it changes)."""
+    if new is old:
+        return True
+    if isinstance(new, str):
+        return new == old
+    if isinstance(new, tuple) and isinstance(old, tuple) and len(new) == len(old):
+        return all(a is b or _same(a, b) for a, b in zip(new, old, strict=True))
+    return False

@@ -202,25 +202,52 @@ def action_exprs(action: Action) -> tuple[Expr, ...]:
     return found
 
 
+# The three queries below, by the expression's identity: one parsed text is one object on every
+# transition that has it (ir.build parses each distinct text once), and the checks, the
+# lowering and the SCXML writer ask about each transition. Each entry holds its expression, so
+# no id is reused while it is kept; the answers are frozen. Bounded: cleared when full.
+_ASKED: dict[tuple[str, int], tuple[Expr, frozenset[str]]] = {}
+_ASKED_LIMIT = 1 << 16
+
+
+def _asked(query: str, expr: Expr, answer: Callable[[Expr], frozenset[str]]) -> frozenset[str]:
+    key = (query, id(expr))
+    held = _ASKED.get(key)
+    if held is not None and held[0] is expr:
+        return held[1]
+    found = answer(expr)
+    if len(_ASKED) >= _ASKED_LIMIT:
+        _ASKED.clear()
+    _ASKED[key] = (expr, found)
+    return found
+
+
 def free_names(expr: Expr) -> frozenset[str]:
     """Member data names read by the expression (the root of `a.b` is `a`; no event fields)."""
-    return frozenset(n.name for n in walk(expr) if isinstance(n, Name))
+    return _asked(
+        "names", expr, lambda e: frozenset(n.name for n in walk(e) if isinstance(n, Name))
+    )
 
 
 def event_fields(expr: Expr) -> frozenset[str]:
     """Fields of the triggering event read by the expression."""
-    return frozenset(n.field for n in walk(expr) if isinstance(n, EventField))
+    return _asked(
+        "fields", expr, lambda e: frozenset(n.field for n in walk(e) if isinstance(n, EventField))
+    )
 
 
 def in_states(expr: Expr) -> frozenset[str]:
     """The states `In(...)` tests in the expression."""
-    return frozenset(n.state for n in walk(expr) if isinstance(n, InState))
+    return _asked(
+        "states", expr, lambda e: frozenset(n.state for n in walk(e) if isinstance(n, InState))
+    )
 
 
 def resolve_states(expr: Expr, ids: Callable[[str], str]) -> Expr:
     """`In(name)` with its name replaced by `ids(name)` (lowering: names to chart ids)."""
     if isinstance(expr, InState):
-        return InState(state=ids(expr.state))
+        state = ids(expr.state)
+        return expr if state == expr.state else InState(state=state)
     return _rebuild(expr, lambda e: resolve_states(e, ids))
 
 

@@ -3,6 +3,7 @@ each one line and clipped to a limit (raw, unescaped: each renderer escapes for 
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable, Sequence
 
 from swarmgen import expr
@@ -15,8 +16,10 @@ TRIGGER_LIMIT = 40
 ACTIVITY_LIMIT = 48
 
 
+@functools.lru_cache(maxsize=4096)
 def clip(text: str, limit: int) -> str:
-    """One line, at most `limit` characters (an ellipsis marks the cut)."""
+    """One line, at most `limit` characters (an ellipsis marks the cut). Memoised: the same
+    guard and effect texts label thousands of transitions."""
     flat = " ".join(one_line(text).split())
     return flat if len(flat) <= limit else flat[: limit - 1].rstrip() + "…"
 

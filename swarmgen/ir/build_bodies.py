@@ -53,7 +53,7 @@ def actions_of(
         )
         return ()
     try:
-        return tuple(expr.resolve_action_enums(a, b.enumerations) for a in expr.parse_actions(text))
+        return b.actions(text)
     except expr.ExprError as err:
         error = quote_error(text, err)
         b.diags.append(dg.EFFECT_SYNTAX.at(behaviour.span, what=what, error=error, hint=err.hint))
@@ -80,17 +80,11 @@ def activity_call(
     bindings: tuple[expr.Binding, ...] = ()
     if text.strip():
         try:
-            bindings = tuple(_resolved(n, b) for n in expr.parse_bindings(text))
+            bindings = b.bindings(text)
         except expr.ExprError as err:
             error = quote_error(text, err)
             b.diags.append(dg.BINDING_ERROR.at(element.span, error=error, hint=err.hint))
     return BehaviourCall(behaviour=behaviour.id, bindings=bindings, span=element.span)
-
-
-def _resolved(binding: expr.Binding, b: Builder) -> expr.Binding:
-    """The binding with its enumeration literals resolved (itself when it has none)."""
-    value = expr.resolve_enums(binding.value, b.enumerations)
-    return binding if value is binding.value else expr.Binding(name=binding.name, value=value)
 
 
 def quote_error(text: str, err: expr.ExprError) -> str:

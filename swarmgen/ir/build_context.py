@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 from swarmgen import diagnostics as dg
+from swarmgen import expr
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend.raw import RawElement, RawModel, StereotypeApplication
 from swarmgen.ir.literals import (
@@ -57,6 +58,13 @@ class Builder:
     events_by_signal: dict[str, Event] = field(default_factory=dict)
     events_by_name: dict[str, Event] = field(default_factory=dict)
     enumerations: dict[str, Enumeration] = field(default_factory=dict)  # by name
+    # Parsed texts, enumeration literals resolved: the same guard or effect text recurs on
+    # thousands of transitions (10,000 states: 13,700 texts, 330 distinct). The results are
+    # frozen and carry no span (a diagnostic's span is the element's), so one serves every
+    # occurrence. Filled only after `enumerations` is complete; a text that fails is not kept.
+    parsed_exprs: dict[str, expr.Expr] = field(default_factory=dict)
+    parsed_actions: dict[str, tuple[expr.Action, ...]] = field(default_factory=dict)
+    parsed_bindings: dict[str, tuple[expr.Binding, ...]] = field(default_factory=dict)
 
     @cached_property
     def declares_events(self) -> bool:
@@ -65,6 +73,31 @@ class Builder:
         return any(a.name == "SwarmEvent" for a in self.raw.stereotypes)
 
     # --- helpers
+
+    def expression(self, text: str) -> expr.Expr:
+        """`text` parsed as one expression, its enumeration literals resolved; raises ExprError."""
+        found = self.parsed_exprs.get(text)
+        if found is None:
+            found = expr.resolve_enums(expr.parse_expr(text), self.enumerations)
+            self.parsed_exprs[text] = found
+        return found
+
+    def actions(self, text: str) -> tuple[expr.Action, ...]:
+        """`text` parsed as statements, their enumeration literals resolved; raises ExprError."""
+        found = self.parsed_actions.get(text)
+        if found is None:
+            parsed = expr.parse_actions(text)
+            found = tuple(expr.resolve_action_enums(a, self.enumerations) for a in parsed)
+            self.parsed_actions[text] = found
+        return found
+
+    def bindings(self, text: str) -> tuple[expr.Binding, ...]:
+        """`text` parsed as argument bindings, enumeration literals resolved; raises ExprError."""
+        found = self.parsed_bindings.get(text)
+        if found is None:
+            found = tuple(_resolved(binding, self) for binding in expr.parse_bindings(text))
+            self.parsed_bindings[text] = found
+        return found
 
     def stereotype(self, element: RawElement, names: Iterable[str]) -> StereotypeApplication | None:
         """The first application on `element` of one of the named stereotypes, if any."""
@@ -288,3 +321,9 @@ def short(text: str, limit: int = 60) -> str:
     """Model text quoted for a message: whitespace collapsed, clipped at `limit`."""
     flat = " ".join(text.split())
     return f"'{flat[: limit - 3]}...'" if len(flat) > limit else f"'{flat}'"
+
+
+def _resolved(binding: expr.Binding, b: Builder) -> expr.Binding:
+    """The binding with its enumeration literals resolved (itself when it has none)."""
+    value = expr.resolve_enums(binding.value, b.enumerations)
+    return binding if value is binding.value else expr.Binding(name=binding.name, value=value)

@@ -50,7 +50,7 @@ def _expression(b: Builder, element: RawElement, text: str | None) -> expr.Expr 
     if text is None:
         return None
     try:
-        return expr.resolve_enums(expr.parse_expr(text), b.enumerations)
+        return b.expression(text)
     except expr.ExprError as err:
         error = quote_error(text, err)
         b.diags.append(dg.GUARD_SYNTAX.at(element.span, error=error, hint=err.hint))

@@ -116,7 +116,7 @@ def _guard(b: Builder, element: RawElement) -> tuple[expr.Expr | None, str | Non
     if not text.strip():
         return None, None
     try:
-        return expr.resolve_enums(expr.parse_expr(text), b.enumerations), text
+        return b.expression(text), text
     except expr.ExprError as err:
         error = quote_error(text, err)
         b.diags.append(dg.GUARD_SYNTAX.at(constraint.span, error=error, hint=err.hint))
