@@ -141,7 +141,7 @@ def _transition(draw: st.DrawFn, doc: Doc, targets: list[str]) -> str:
         if draw(st.booleans()):
             attrs += ' type="internal"'
     body = "" if scenario else '<assign location="n" expr="n + 1"/>'
-    body += _actions(draw, doc, delay_ok=scenario, on_event=bool(event))
+    body += _actions(draw, doc, delay_ok=scenario, on_event=event not in LOOPING)  # SG113
     return f"<transition{attrs}>{body}</transition>"
 
 
