@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import faulthandler
 import os
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -262,3 +263,26 @@ def test_generated_charts_run_alike_everywhere(
             f"{backend} differs from Qt SCXML\n{text}\nsteps: {steps}\n"
             f"{backend}: {found[backend]}\nscxml: {found['scxml']}"
         )
+    if ORIGINAL:
+        _as_written(path, text, steps, found["scxml"])
+
+
+ORIGINAL = os.environ.get("SWARMGEN_FUZZ_ORIGINAL") == "1"
+
+
+def _as_written(path: Path, text: str, steps: list[dict[str, Any]], emitted: list[Any]) -> None:
+    """Hunting only: Qt SCXML on the document as written against the one swarmgen emits (the
+    reader's meaning). Skipped where plain ECMAScript differs on purpose (`x / 0` is Infinity,
+    a missing field undefined: swarmgen raises error.execution, docs/semantics.md). Open lead:
+    Qt hangs (no step record in 10 s) on the document as written with an eventless
+    `<transition cond="n &lt; 6" target="s1">` (n + 1, `<raise>`) in `s1`, where the emitted
+    one runs; not looked into yet, so this mode is off by default (SWARMGEN_FUZZ_ORIGINAL=1)."""
+    if FAILING in text or "_event.data" in text:
+        return
+    ids = set(re.findall(r' id="([^"]+)"', text))
+    written = replay.run_qt(path, steps)
+
+    def shape(trace: list[Any]) -> list[Any]:
+        return [(sorted({a.split("__")[-1] for a in r["active"]} & ids), r["data"]) for r in trace]
+
+    assert shape(written) == shape(emitted), f"as written vs emitted\n{text}\nsteps: {steps}"
