@@ -494,6 +494,31 @@ def test_qt_tells_the_events_a_document_sends_itself(tmp_path: Path, qt_availabl
     )
 
 
+# found by tests/test_generated_equivalence.py: a bounded document (the `*` self-loop) whose
+# start takes an eventless transition (the transient initial state that computes `arr`)
+_EVENTLESS_AT_START = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="s1"
+  name="Start"><datamodel><data id="n" expr="0"/><data id="arr" expr="[1, 2, 3]"/></datamodel>
+  <state id="s1"><transition event="*" cond="n &lt; 6"><assign location="n" expr="n + 1"/>
+  </transition></state>
+</scxml>
+"""
+
+
+def test_the_step_bound_raises_nothing_before_the_first_event(
+    tmp_path: Path, qt_available: None
+) -> None:
+    """W3C 5.10: `_event` is bound only when the first event is processed, so an eventless
+    cond at the start must not name it (Qt: a ReferenceError, error.execution); `$sg.tick()`
+    reads it after `typeof`, and every backend counts no error."""
+    document = tmp_path / "start.scxml"
+    document.write_text(_EVENTLESS_AT_START, encoding="utf-8")
+    steps = [{"event": "a"}]
+    traces = {b: replay.replay(document, "Start", steps, b) for b in ("asyncio", "scxml")}
+    assert traces["asyncio"] == traces["scxml"]
+    assert [r["errors"] for r in traces["scxml"]] == [0, 0]
+    assert [r["data"]["n"] for r in traces["scxml"]] == [0, 1]
+
+
 def test_bounded_document_is_valid_scxml(tmp_path: Path, scxml_schema: Any) -> None:
     from swarmgen.scxml.emit import emit
 

@@ -239,3 +239,26 @@ def test_an_untyped_list_datum_survives_the_round_trip(tmp_path: Path) -> None:
     assert _body((tmp_path / "b" / "scxml" / "M.scxml").read_text()) == _body(text)
     for document in (source, tmp_path / "b" / "scxml" / "M.scxml"):
         assert irp.run_document(document.read_bytes(), document) == irp.Outcome("pass")
+
+
+NESTED_PARALLEL = """<scxml xmlns="http://www.w3.org/2005/07/scxml" version="1.0" initial="p1" name="P">
+  <parallel id="p1">
+    <parallel id="p2"><state id="s3"/><state id="s4"/></parallel>
+    <state id="s5"/>
+  </parallel>
+</scxml>
+"""
+
+
+def test_a_parallel_in_a_parallel_keeps_its_regions(tmp_path: Path, qt_available: None) -> None:
+    """W3C 3.4: every child of a `<parallel>` is active with it. A behaviour-less `<parallel>`
+    child was read as the region itself, its children states one after another (only s3 was
+    active); found by tests/test_generated_equivalence.py's generator."""
+    from swarmgen import replay
+
+    source = tmp_path / "p.scxml"
+    source.write_text(NESTED_PARALLEL, encoding="utf-8")
+    traces = {b: replay.replay(source, "P", [], b) for b in ("asyncio", "scxml")}
+    assert traces["asyncio"] == traces["scxml"]
+    (start,) = traces["scxml"]
+    assert {name.split("__")[-1] for name in start["active"]} >= {"p1", "p2", "s3", "s4", "s5"}

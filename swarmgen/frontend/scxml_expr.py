@@ -49,7 +49,7 @@ class InState:
 
 @dataclass(frozen=True)
 class Marker:
-    """`$sg.tick(_event)` or `$sg.spin()`: the step bound's bookkeeping, which the emitter
+    """`$sg.tick()` (`$sg.tick(_event)` as older documents write it) or `$sg.spin()`: the step bound's bookkeeping, which the emitter
     writes again from the model (docs/scxml.md), so the reader drops it."""
 
     name: str
@@ -169,7 +169,7 @@ class _Parser:
         return token
 
     def special(self) -> Piece | None:
-        """`In('s')`, `$sg.tick(_event)`, `$sg.spin()` as a whole conjunct."""
+        """`In('s')`, `$sg.tick()` (or `$sg.tick(_event)`), `$sg.spin()` as a whole conjunct."""
         texts = [t[1] for t in self.toks]
         is_in = texts[:2] == ["In", "("] and texts[3:] == [")"] and len(texts) == 4
         if is_in and self.toks[2][0] == "str":

@@ -132,7 +132,11 @@ class States:
     def region_of_state(self, owner: RawElement, node: etree._Element) -> None:
         """A child of `<parallel>`: a region (its children), or a region holding it when it
         has behaviour of its own (W3C parallel children are states)."""
-        plain = not (children(node, "onentry", "onexit", "transition", "invoke"))
+        # a <parallel> child is never its region: its own children are regions, not states
+        # one after another (W3C 3.4)
+        plain = local(node) == "state" and not (
+            children(node, "onentry", "onexit", "transition", "invoke")
+        )
         name = sg(node, "region") or str(node.get("id") or "Region")
         if sg(node, "region") is not None or (plain and children(node, *_STATES)):
             if node.get("id"):

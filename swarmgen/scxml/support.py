@@ -47,16 +47,19 @@ var $sg = {
 # The step bound (docs/semantics.md), only in a document with bounded transitions (so others
 # keep their bytes). A bounded transition's cond ends with `$sg.spin()`: it counts, throws once
 # past the bound (Qt raises error.execution and the cond is false), then stays false until the
-# count restarts. Every cond of such a document starts with `$sg.tick(_event)`, which restarts
+# count restarts. Every cond of such a document starts with `$sg.tick()`, which restarts
 # it at the first transition considered under a new input from outside, exactly where the
 # engine restarts it (`Engine._restart_count`); not under an event the document sent itself
 # (`<send target="#_internal">`, a `raise` with data: timers have a sendid, those have none).
+# It reads `_event` itself, after `typeof`: before the first event Qt has no `_event`, and a
+# cond naming it would throw (an error.execution the engine never raises).
 STEP_SCRIPT = f"""
 $sg.bound = {STEP_BOUND};
 $sg.steps = 0;
 $sg.hit = false;
 $sg.last = null;
-$sg.tick = function (e) {{
+$sg.tick = function () {{
+  var e = typeof _event === "undefined" ? null : _event;
   if (e !== undefined && e !== null && e.type === "external" && e !== $sg.last &&
       !(e.origin === "#_internal" && !e.sendid)) {{
     $sg.last = e;
@@ -143,5 +146,5 @@ $sg.startswith = function (t, p) {
 };
 """
 STARTS_CALL = "$sg.startswith("
-TICK = "$sg.tick(_event)"
+TICK = "$sg.tick()"
 SPIN = "$sg.spin()"
