@@ -339,7 +339,7 @@ class Engine(Sends):
 
     def _restart_count(self, event: Event | None) -> None:
         """The step bound's count restarts when the first transition is considered under a new
-        input from outside (not an event the member raised itself), as `$sg.tick(_event)` at
+        input from outside (not an event the member raised itself), as `$sg.tick()` at
         the head of every cond of the SCXML document restarts it in Qt SCXML."""
         if event is not None and event.kind == "external":
             self._input = event
