@@ -181,14 +181,12 @@ class World(Targets):
     def start_covering(self, member: int, tick: int, reports: bool) -> list[int]:
         """Coverage starts: the member goes on from where it stands, in its current direction.
         Its view now counts as seen; returns the unfound targets in view (if it detects)."""
-        g = np.array([member], dtype=np.int64)
         self.stop_covering(member, tick)  # a second Coverage goes on from where it is
         self.moving[member] = True
         self.reports[member] = reports
         self.s0[member] = tick
-        self.seg_end[member] = tick + int(
-            longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g], self.W, self.H)[0]
-        )
+        ox, oy, dx, dy = self.body[member].tolist()  # one body: plain floats, the same bits
+        self.seg_end[member] = tick + longest_one(ox, oy, dx, dy, self.W, self.H)
         ix, iy = int(self.ox[member]), int(self.oy[member])
         self._starts.append((member, tick, int(self.cell(int(self.run_of[member]), ix, iy))))
         if self.detects(member):
