@@ -362,31 +362,33 @@ class Batch:
         while active:
             for run in active:
                 self._process(run)
-                self._check(run)
+            self._check(active)
             active = [r for r in active if self.done[r] is None]
             if not active:
                 break
-            per = self.world.per_run
-            movers = sum(int(self.world.moving[r * per : (r + 1) * per].sum()) for r in active)
-            cap = max(MIN_CHUNK, POINTS_PER_ROUND // max(1, movers))
             now = np.array(self.t, dtype=np.int64)
-            horizon = now.copy()
-            for run in active:
-                t = self.t[run]
-                schedule = self.schedule[run]
-                due = schedule[0][0] if schedule else INF
-                chunk = min(cap, max(MIN_CHUNK, (t - self.origin) // 8))
-                horizon[run] = max(t, min(due, t + chunk, self.scenario.max_ticks))
-            end, finds = self.world.advance(now, horizon)
+            end, finds = self.world.advance(now, self._horizons(now, active))
             for run, g, ix, iy in finds:
                 self.finds.setdefault(run, []).append((g, ix, iy))
+            ends = end.tolist()
             for run in active:
-                self.t[run] = int(end[run])
+                self.t[run] = ends[run]
         return [self._result(run) for run in range(runs)]
 
-    def _moving(self, run: int) -> bool:
+    def _horizons(self, now: np.ndarray, active: list[int]) -> np.ndarray:
+        """Each active run's next round ends at its next scheduled tick, or after a chunk of
+        ticks that grows with the elapsed time (bounded by the points a round may compute)."""
         per = self.world.per_run
-        return bool(self.world.moving[run * per : (run + 1) * per].any())
+        movers = int(self.world.moving.reshape(-1, per)[active].sum())
+        cap = max(MIN_CHUNK, POINTS_PER_ROUND // max(1, movers))
+        horizon = now.copy()
+        for run in active:
+            t = self.t[run]
+            schedule = self.schedule[run]
+            due = schedule[0][0] if schedule else INF
+            chunk = min(cap, max(MIN_CHUNK, (t - self.origin) // 8))
+            horizon[run] = max(t, min(due, t + chunk, self.scenario.max_ticks))
+        return horizon
 
     def _process(self, run: int) -> None:
         t = self.t[run]
@@ -423,27 +425,28 @@ class Batch:
                 )
         self.events[run] += count
 
-    def _check(self, run: int) -> None:
-        if self.done[run] is not None:
-            return
-        s = self.scenario
-        if s.stop == "coverage":
-            need = max(1, math.ceil(s.stop_level * self.geometry.cells - 1e-9))
-            if self.world.covered[run] >= need:
-                self.done[run] = "coverage"
-        elif s.stop == "rescued":
-            status = self.world.status[run]
-            need = math.ceil(s.stop_level * len(status) - 1e-9)
-            if int((status == RESCUED).sum()) >= need and self.t[run] >= self.origin:
-                self.done[run] = "rescued"
-        if self.done[run] is None:
-            if self.t[run] >= s.max_ticks:
-                self.done[run] = "ticks" if s.stop == "ticks" else "max_ticks"
-            elif not self.schedule[run] and not self._moving(run):
-                self.done[run] = "stalled"  # nothing will ever happen again
-        if self.done[run] is not None:
-            per = self.world.per_run
-            self.world.moving[run * per : (run + 1) * per] = False
+    def _check(self, active: list[int]) -> None:
+        """Which active runs stop now, and why (one pass over the world's per-run arrays)."""
+        s, w = self.scenario, self.world
+        covered = w.covered.tolist()
+        moving = np.any(w.moving.reshape(-1, w.per_run), axis=1).tolist()
+        need = max(1, math.ceil(s.stop_level * self.geometry.cells - 1e-9))
+        for run in active:
+            if s.stop == "coverage":
+                if covered[run] >= need:
+                    self.done[run] = "coverage"
+            elif s.stop == "rescued":
+                status = w.status[run]
+                rescued = math.ceil(s.stop_level * len(status) - 1e-9)
+                if int((status == RESCUED).sum()) >= rescued and self.t[run] >= self.origin:
+                    self.done[run] = "rescued"
+            if self.done[run] is None:
+                if self.t[run] >= s.max_ticks:
+                    self.done[run] = "ticks" if s.stop == "ticks" else "max_ticks"
+                elif not self.schedule[run] and not moving[run]:
+                    self.done[run] = "stalled"  # nothing will ever happen again
+            if self.done[run] is not None:
+                w.moving[run * w.per_run : (run + 1) * w.per_run] = False
 
     def _result(self, run: int) -> RunResult:
         w = self.world

@@ -135,17 +135,32 @@ def entering(
     corner its column holds); repeats across points are the callers' to drop.
     `view`: the stepping members' view radius when it is less than the padding's
     (`geometry.view`, the largest); `view_offsets` are then that view's."""
+    return np.concatenate(entering_parts(now, before, full, geometry, view_offsets, view))
+
+
+def entering_parts(
+    now: NDArray[np.signedinteger],
+    before: NDArray[np.signedinteger],
+    full: NDArray[np.bool_],
+    geometry: Geometry,
+    view_offsets: NDArray[np.signedinteger],
+    view: int | None = None,
+) -> list[NDArray[np.signedinteger]]:
+    """`entering` in four parts, whose concatenation it is (whole views, columns, rows,
+    diagonal steps' rows): a caller that filters them can concatenate only what it keeps."""
     pw = geometry.width + 2 * geometry.view
     v = geometry.view if view is None else view
     if v == 0:
-        return now
+        return [now]
     delta = now - before
     dy = (delta + pw + 1) // pw - 1  # exact for steps to a neighbour (pw >= 3)
     dx = delta - dy * pw
     full = full | (np.abs(dx) > 1) | (np.abs(dy) > 1)
-    cols = ~full & (dx != 0)
-    rows = ~full & (dy != 0)
-    straight, corner = rows & (dx == 0), rows & (dx != 0)
+    step, across = ~full, dx != 0
+    cols = step & across
+    rows = step & (dy != 0)
+    corner = rows & across
+    straight = rows ^ corner  # rows & (dx == 0)
     span = np.arange(-v, v + 1, dtype=now.dtype)
     # `np.compress`: picking by these scattered masks is several times faster than boolean
     # indexing (the same values, in the same order)
@@ -154,11 +169,9 @@ def entering(
     shifted = at_corner + np.compress(corner, dy) * (v * pw) + (np.compress(corner, dx) < 0)
     column = at_cols + np.compress(cols, dx) * v  # the column's middle patch
     row = at_straight + np.compress(straight, dy) * (v * pw)  # the row's middle patch
-    return np.concatenate(
-        [
-            (np.compress(full, now)[:, None] + view_offsets[None, :]).reshape(-1),
-            (column[:, None] + (span * pw)[None, :]).reshape(-1),
-            (row[:, None] + span[None, :]).reshape(-1),
-            (shifted[:, None] + span[None, :-1]).reshape(-1),
-        ]
-    )
+    return [
+        (np.compress(full, now)[:, None] + view_offsets[None, :]).reshape(-1),
+        (column[:, None] + (span * pw)[None, :]).reshape(-1),
+        (row[:, None] + span[None, :]).reshape(-1),
+        (shifted[:, None] + span[None, :-1]).reshape(-1),
+    ]

@@ -1,8 +1,9 @@
 """The limits of a simulation, checked before anything runs (docs/simulate.md, docs/security.md)."""
 
 # Limits, checked before anything runs (docs/simulate.md): beyond them a sweep would exhaust
-# memory (about 9 KB per member and repetition, 16 bytes per patch and repetition) or overflow
-# the world's 32-bit tick arrays, instead of failing cleanly.
+# memory (about 10 KB per member and repetition, 1 KB of it the random draws kept ahead, 16
+# bytes per patch and repetition) or overflow the world's 32-bit tick arrays, instead of
+# failing cleanly.
 SCENARIO_BYTES = 1 << 20  # a scenario file
 MAX_SIDE = 10_000  # patches along one side of the world
 MAX_VIEW = 16  # Chebyshev radius of a member's view

@@ -31,17 +31,15 @@ leg whose view holds no unseen patch and no target are skipped without computing
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from swarmgen.sim.blocks import Blocks, entering
+from swarmgen.sim.blocks import Blocks, entering_parts
 from swarmgen.sim.grid import (
     BLOCK,
     F64,
-    GAMMAS,
     I64,
     INF,
     MEMBER_KEY,
@@ -55,10 +53,12 @@ from swarmgen.sim.grid import (
     mix64,
 )
 from swarmgen.sim.targets import CLAIMED, FOUND, RESCUED, UNFOUND, Targets
+from swarmgen.sim.turns import TRIES, Draws, inside, longest, longest_one, turn_one
 
 __all__ = ["CLAIMED", "FOUND", "RESCUED", "UNFOUND", "World"]
 
-_NEXT = np.array([[0.0], [1.0]])  # a step count and the one after it, as rows
+Pieces = tuple[tuple[I64, I64, I64, I64], F64]  # (member, start, steps, s0), body rows
+FEW = 12  # members left turning in a round that turn in plain Python (`swarmgen.sim.turns`)
 
 
 class World(Targets):
@@ -101,7 +101,7 @@ class World(Targets):
         member = np.tile(np.arange(per_run, dtype=np.uint64), runs)
         run_keys = np.asarray(run_keys, dtype=np.uint64)
         # each member's random stream: splitmix64, state = key + draws * golden gamma
-        self.stream: U64 = mix64(run_keys[self.run_of] + member * MEMBER_KEY)
+        self.draws = Draws(mix64(run_keys[self.run_of] + member * MEMBER_KEY))
         # the body, in patch-corner coordinates: position (the segment's origin while
         # covering), heading, the segment's first and last tick
         self.body: NDArray[np.float64] = np.empty((count, 4), dtype=np.float64)
@@ -165,9 +165,6 @@ class World(Targets):
         iy, ix = divmod(rest, self.PW)
         return run, ix - self.v, iy - self.v
 
-    def _inside(self, u: F64, w: F64) -> Bool:
-        return (u >= 0) & (u < self.W) & (w >= 0) & (w < self.H)
-
     def where(self, member: int, tick: int | None = None) -> tuple[float, float]:
         """Where a member is (at `tick` if it is covering)."""
         steps = float(tick - self.s0[member]) if tick is not None and self.moving[member] else 0.0
@@ -179,53 +176,17 @@ class World(Targets):
         """Put a standing member at (x, y) (a drive ends, or is stopped on the way)."""
         self.ox[member], self.oy[member] = x + 0.5, y + 0.5
 
-    def _longest(self, ox: F64, oy: F64, dx: F64, dy: F64) -> I64:
-        """How many steps each body can go straight before its next step would leave the grid.
-        The closed form is checked (and corrected) with the position expression itself."""
-        big = float(self.W + self.H)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            nx = np.where(dx > 0, self.W - ox, -ox) / dx  # dx == 0: +-inf or nan
-            ny = np.where(dy > 0, self.H - oy, -oy) / dy
-        limit = np.fmin(np.where(dx == 0, big, nx), np.where(dy == 0, big, ny))
-        # clip's bounds (never NaN here), as two ufuncs: np.clip costs more per call
-        n: I64 = np.minimum(np.maximum(limit, 0.0), big).astype(np.int64)  # >= 0: floor
-        for _ in range(4):
-            # steps n and n + 1 at once (rows 0 and 1), with the position expression itself
-            steps = n.astype(np.float64) + _NEXT
-            inside = self._inside(ox + steps * dx, oy + steps * dy)
-            out = (n > 0) & ~inside[0]
-            more = ~out & inside[1]
-            if not (out.any() or more.any()):
-                break
-            n -= out
-            n += more
-        return n
-
-    def uniforms(self, g: I64, count: int) -> F64:
-        """The next `count` uniform numbers in [0, 1) of each member's own random stream
-        (shape (len(g), count)), without consuming them (see `consume`). The stream is
-        splitmix64 keyed by (run key, member): a draw depends only on the run's key, the
-        member and the draw's number."""
-        z = mix64(self.stream[g][:, None] + GAMMAS[None, 1 : count + 1])
-        return (z >> np.uint64(11)).astype(np.float64) * (1.0 / 9007199254740992.0)
-
-    def consume(self, g: I64, used: I64) -> None:
-        """Advance each member's stream past the `used` draws it took."""
-        self.stream[g] += GAMMAS[used]
-
     # --- covering
 
     def start_covering(self, member: int, tick: int, reports: bool) -> list[int]:
         """Coverage starts: the member goes on from where it stands, in its current direction.
         Its view now counts as seen; returns the unfound targets in view (if it detects)."""
-        g = np.array([member], dtype=np.int64)
         self.stop_covering(member, tick)  # a second Coverage goes on from where it is
         self.moving[member] = True
         self.reports[member] = reports
         self.s0[member] = tick
-        self.seg_end[member] = tick + int(
-            self._longest(self.ox[g], self.oy[g], self.dx[g], self.dy[g])[0]
-        )
+        ox, oy, dx, dy = self.body[member].tolist()  # one body: plain floats, the same bits
+        self.seg_end[member] = tick + longest_one(ox, oy, dx, dy, self.W, self.H)
         ix, iy = int(self.ox[member]), int(self.oy[member])
         self._starts.append((member, tick, int(self.cell(int(self.run_of[member]), ix, iy))))
         if self.detects(member):
@@ -254,42 +215,59 @@ class World(Targets):
         ox = body[:, 0] + steps * body[:, 2]
         oy = body[:, 1] + steps * body[:, 3]
         body[:, 0], body[:, 1] = ox, oy
+        drawn = self.draws.drawn[g]
         todo = np.arange(len(g))
-        gt, oxt, oyt = g, ox, oy  # those still to turn (all of them in the first block)
-        for block in range(16):  # candidates in blocks; the first that keeps the body inside wins
-            angle = (2.0 * math.pi) * self.uniforms(gt, BLOCK)
-            cx, cy = np.cos(angle), np.sin(angle)
-            cx += oxt[:, None]
-            cy += oyt[:, None]
-            ok = self._inside(cx, cy)
+        gt, oxt, oyt, dt = g, ox, oy, drawn  # those still to turn (all of them at first)
+        for block in range(TRIES):  # candidates in blocks; the first that keeps it inside wins
+            cx, cy = self.draws.candidates(gt, dt)
+            ok = inside(cx + oxt[:, None], cy + oyt[:, None], self.W, self.H)
             pick = np.argmax(ok, axis=1)
             at = np.arange(len(todo))
             found = ok[at, pick]
-            used = pick + 1  # only the draws up to the chosen one are used
             if found.all():  # the usual case: no row to select
-                chosen = angle[at, pick]
-                rows_left = slice(None) if block == 0 else todo
-                body[rows_left, 2], body[rows_left, 3] = np.cos(chosen), np.sin(chosen)
-                self.consume(gt, used)
+                rows = slice(None) if block == 0 else todo
+                body[rows, 2], body[rows, 3] = cx[at, pick], cy[at, pick]
+                drawn[rows] = dt + pick + 1  # the draws up to the chosen one are taken
                 break
-            rows = np.flatnonzero(found)
-            chosen = angle[rows, pick[rows]]
-            done = todo[rows]
-            body[done, 2], body[done, 3] = np.cos(chosen), np.sin(chosen)
-            used[~found] = BLOCK
-            self.consume(gt, used)
-            todo = todo[~found]
+            hit = np.flatnonzero(found)
+            done, chosen = todo[hit], pick[hit]
+            body[done, 2], body[done, 3] = cx[hit, chosen], cy[hit, chosen]
+            drawn[done] = dt[hit] + chosen + 1
+            miss = ~found
+            todo, dt = todo[miss], dt[miss] + BLOCK
             gt, oxt, oyt = g[todo], ox[todo], oy[todo]
         else:  # vanishingly unlikely: head for the centre
+            drawn[todo] = dt
             cx = self.W / 2 - ox[todo]
             cy = self.H / 2 - oy[todo]
             norm = np.hypot(cx, cy)
             body[todo, 2], body[todo, 3] = cx / norm, cy / norm
-        end = seg_end + self._longest(ox, oy, body[:, 2], body[:, 3])
+        self.draws.drawn[g] = drawn
+        end = seg_end + longest(ox, oy, body[:, 2], body[:, 3], self.W, self.H)
         self.body[g] = body
         self.s0[g] = seg_end
         self.seg_end[g] = end
         return body, end
+
+    def _turn_few(self, g: I64, body: F64, s0: I64, seg_end: I64, horizon: I64) -> Pieces:
+        """`_turn` for a few members, in plain Python with the same operations (the same bits),
+        until each one's segment reaches its horizon; returns their pieces as `_pieces` keeps
+        them (member, start tick, steps, segment origin tick; body rows)."""
+        pieces: list[tuple[int, int, int, int]] = []
+        rows: list[list[float]] = []
+        for i, (ox, oy, dx, dy) in enumerate(body.tolist()):
+            member, start, end, until = int(g[i]), int(s0[i]), int(seg_end[i]), int(horizon[i])
+            while end < until:
+                steps = float(end - start)
+                ox, oy = ox + steps * dx, oy + steps * dy
+                dx, dy = turn_one(self.draws, member, ox, oy, self.W, self.H)
+                start, end = end, end + longest_one(ox, oy, dx, dy, self.W, self.H)
+                pieces.append((member, start, min(end, until) - start, start))
+                rows.append([ox, oy, dx, dy])
+            self.body[member] = ox, oy, dx, dy
+            self.s0[member], self.seg_end[member] = start, end
+        columns = np.array(pieces, dtype=np.int64).reshape(-1, 4).T
+        return (columns[0], columns[1], columns[2], columns[3]), np.array(rows).reshape(-1, 4)
 
     def _pieces(self, g: I64, cur: I64, horizon: I64, expand: bool = True) -> Points:
         """Move members `g` from tick `cur` to `horizon` (turning at the boundary as often as
@@ -307,6 +285,12 @@ class World(Targets):
             if not turning.any():
                 break
             g, horizon, cur = g[turning], horizon[turning], seg_end[turning]
+            if len(g) <= FEW:  # numpy's cost per call would outweigh the few members' turns
+                few, rows = self._turn_few(g, body[turning], s0[turning], cur, horizon)
+                if expand:
+                    ints.append(few)
+                    floats.append(rows)
+                break
             body, seg_end = self._turn(g, body[turning], s0[turning], cur)
             s0 = cur
         if not ints:
@@ -370,7 +354,7 @@ class World(Targets):
             array[g[mask]] = values[mask]
 
     def _state(self) -> list[NDArray[np.generic]]:
-        return [self.body, self.s0, self.seg_end, self.stream]
+        return [self.body, self.s0, self.seg_end, self.draws.drawn]
 
     # --- one round
 
@@ -468,7 +452,7 @@ class World(Targets):
         start = (new & (STRETCH - 1)) == 0
         firsts = np.flatnonzero(start)
         start[firsts] = ~points.linked[new[firsts] >> SHIFT]
-        around = entering(
+        parts = entering_parts(
             flat,
             points.flat[new - 1],  # at a start: another row's, unused
             start,
@@ -476,9 +460,11 @@ class World(Targets):
             self._view_offsets[k],
             self.views[k],
         )
-        # `np.compress` and `np.take`: boolean indexing by a scattered mask is several times
-        # slower (the same values, in the same order)
-        around = np.compress(np.take(self.seen_flag, around) == 0, around)
+        # the unseen candidates, part by part (the same array as filtering `entering` whole,
+        # without concatenating the seen two thirds first). `np.compress` and `np.take`:
+        # boolean indexing by a scattered mask is several times slower (same values, order)
+        seen = self.seen_flag
+        around = np.concatenate([np.compress(np.take(seen, p) == 0, p) for p in parts])
         fresh = distinct(around, self._stamp_seen)
         self.seen_flag[fresh.astype(np.intp, copy=False)] = 1
         self._covered += self.blocks.seen(fresh)  # per run: its patches' blocks are its own

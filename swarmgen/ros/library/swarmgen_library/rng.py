@@ -2,7 +2,7 @@
 
 Draw k (k = 1, 2, ...) of a stream with key K is `mix64(K + k * GOLDEN)` mod 2**64, turned into
 a uniform number in [0, 1) from its top 53 bits, exactly as `swarmgen.sim.grid` /
-`swarmgen.sim.world.World.uniforms` compute it with numpy. A draw depends only on the key and its
+`swarmgen.sim.turns.Draws` compute it with numpy. A draw depends only on the key and its
 number: nothing is shared between members or runs, so the order in which members are stepped
 cannot change a number, and the abstract world's member key gives the very same draws.
 """
