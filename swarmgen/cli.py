@@ -15,12 +15,12 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Iterator, MutableMapping
-from dataclasses import dataclass
 from importlib import import_module
 
 import click
 
 from swarmgen import __version__, collector, console
+from swarmgen.records import dataclass
 
 
 @dataclass(frozen=True)

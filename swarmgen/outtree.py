@@ -30,11 +30,12 @@ import stat
 import sys
 import tempfile
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path, PurePosixPath
 
 from swarmgen import __version__
 from swarmgen.errors import SwarmgenError
+from swarmgen.records import dataclass
 
 MANIFEST = ".swarmgen.json"
 FORMAT = 1

@@ -10,7 +10,7 @@ import gc
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
@@ -26,6 +26,7 @@ from swarmgen.generated import header, markdown_cell
 from swarmgen.ir import query
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
+from swarmgen.records import dataclass
 from swarmgen.ros.idl_index import InterfaceIndex, default_roots
 
 if TYPE_CHECKING:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
 from swarmgen import expr
@@ -19,6 +18,7 @@ from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
 from swarmgen.ir.primitives import Primitive, primitive
 from swarmgen.ir.query import ModelIndex, walk
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 # primitive type -> its type class (Real and Integer are both numbers in every target)

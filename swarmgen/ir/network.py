@@ -13,9 +13,10 @@ a misspelling of it.
 from __future__ import annotations
 
 import difflib
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from swarmgen.ir.nodes import HardwareComponent, HardwareKind, Model
+from swarmgen.records import dataclass
 from swarmgen.runtime.netoptions import (
     KNOWN_KEYS,
     TRANSPORT_KEYS,

@@ -9,7 +9,7 @@ with a hint (the closest name). `verify --property TEXT` checks its text the sam
 from __future__ import annotations
 
 import difflib
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import codes_verify as cv
@@ -18,6 +18,7 @@ from swarmgen.ir.nodes import FinalState, Model, State, SwarmProperty
 from swarmgen.ir.query import walk
 from swarmgen.props.parse import parse_property
 from swarmgen.props.tree import Count, Datum, InState, Occurs, Property, property_atoms
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 _NUMBERS = frozenset({"Integer", "Real", "UnlimitedNatural"})

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import difflib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any, Literal
 
 from swarmgen.ir.nodes import Behaviour, DataType, Enumeration, Property
 from swarmgen.ir.primitives import Primitive, primitive
 from swarmgen.names import ros_name
+from swarmgen.records import dataclass
 from swarmgen.ros.idl import (
     FLOATS,
     INTEGERS,
