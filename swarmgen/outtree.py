@@ -20,7 +20,6 @@ The rules (docs/security.md):
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import errno
 import hashlib
 import json
@@ -28,7 +27,6 @@ import os
 import re
 import stat
 import sys
-import tempfile
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import field
 from pathlib import Path, PurePosixPath
@@ -307,7 +305,7 @@ def preflight(out_dir: Path, command: str) -> Path:
         _clear_debris(target)
         inspect(target, command)
         target.parent.mkdir(parents=True, exist_ok=True)
-        os.rmdir(tempfile.mkdtemp(prefix=_staging_prefix(target), dir=target.parent))  # writable?
+        os.rmdir(_mkdtemp(prefix=_staging_prefix(target), dir=target.parent))  # writable?
         return target
 
 
@@ -342,7 +340,7 @@ def _reported(out_dir: Path) -> Iterator[None]:
 def _stage(files: Tree, target: Path) -> Path:
     """The new tree in a sibling directory, its manifest written first so that debris of a kill
     lists what it holds."""
-    staging = Path(tempfile.mkdtemp(prefix=_staging_prefix(target), dir=target.parent))
+    staging = Path(_mkdtemp(prefix=_staging_prefix(target), dir=target.parent))
     try:
         (staging / MANIFEST).write_bytes(_bytes(files[PurePosixPath(MANIFEST)]))
         for relative, content in sorted(files.items()):
@@ -361,6 +359,14 @@ def _stage(files: Tree, target: Path) -> Path:
 
 def _staging_prefix(target: Path) -> str:
     return f".{target.name[:100]}.swarmgen-new-"  # the sibling's name must fit in 255 bytes
+
+
+def _mkdtemp(prefix: str, dir: Path) -> str:
+    """`tempfile.mkdtemp`, imported when a tree is written: the pipeline imports this module for
+    `validate` too, and tempfile brings shutil, bz2 and lzma."""
+    import tempfile
+
+    return tempfile.mkdtemp(prefix=prefix, dir=dir)
 
 
 def _commit(staging: Path, target: Path, existing: Existing, manifest: Manifest) -> None:
@@ -385,6 +391,8 @@ def _exchange(staging: Path, target: Path) -> bool:
     if not sys.platform.startswith("linux"):
         return False
     os.chmod(staging, stat.S_IMODE(target.stat().st_mode))
+    import ctypes  # only to replace a tree: `validate` imports this module too
+
     libc = ctypes.CDLL(None, use_errno=True)
     if not hasattr(libc, "renameat2"):
         return False

@@ -23,12 +23,13 @@ These modules are part of the package, written by an explicit build step: not a 
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import importlib
+import os
 import sys
 import types
 from collections.abc import Callable, Iterator, Mapping
-from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -63,12 +64,25 @@ def _table(module: str) -> Mapping[str, types.CodeType]:
     if found is None:
         if not module.startswith("swarmgen."):
             return {}
-        try:
-            found = importlib.import_module(record_module(module)).FUNCTIONS
-        except ModuleNotFoundError:
-            found = {}
+        name = record_module(module)
+        found = {}
+        if _bytecode_kept(name):
+            with contextlib.suppress(ModuleNotFoundError):  # a module without dataclasses
+                found = importlib.import_module(name).FUNCTIONS
         _TABLES[module] = found
     return found
+
+
+def _bytecode_kept(name: str) -> bool:
+    """Whether importing module `name` will not compile it: its bytecode is cached, or will be
+    once compiled. Where bytecode is neither there nor written (PYTHONDONTWRITEBYTECODE and no
+    `.pyc`), compiling a whole `_records/` module costs more than the methods it holds."""
+    if not sys.dont_write_bytecode:
+        return True
+    import importlib.util
+
+    spec = importlib.util.find_spec(name)
+    return spec is not None and spec.cached is not None and os.path.exists(spec.cached)
 
 
 def _create_fn(
@@ -99,7 +113,7 @@ def _create_fn(
     return create(**values)
 
 
-@contextmanager
+@contextlib.contextmanager
 def _precompiled() -> Iterator[None]:
     """`dataclasses` compiling its methods through `_create_fn` while the block runs."""
     if _CREATE_FN is None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import os
 import pickle
 import subprocess
 import sys
@@ -65,13 +66,43 @@ def test_each_function_is_its_text_compiled() -> None:
         assert _normalised(code) == _normalised(made), (stem, text)
 
 
-def test_a_swarmgen_dataclass_takes_its_methods_from_records() -> None:
+def check_precompiled() -> None:
+    """Span's and Manifest's methods come from `_records/` (run in a fresh process that keeps
+    bytecode: `test_precompiled_in_a_process_that_keeps_bytecode`)."""
     for method in ("__init__", "__repr__", "__eq__", "__hash__", "__setattr__", "__delattr__"):
         attribute = getattr(Span, method)
         assert attribute.__qualname__ == f"Span.{method}"
         function = getattr(attribute, "__wrapped__", attribute)  # __repr__: recursion guard
         assert function.__code__.co_filename == str(records.DIRECTORY / "span.py"), method
         assert function.__globals__ is vars(sys.modules["swarmgen.span"]), method
+    assert Manifest.__init__.__code__.co_filename == str(records.DIRECTORY / "outtree.py")
+
+
+def _run(code: str, env: dict[str, str]) -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stderr
+
+
+def test_precompiled_in_a_process_that_keeps_bytecode(tmp_path: Path) -> None:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPYCACHEPREFIX"] = str(tmp_path)
+    checks = "check_precompiled(); behaves_as_the_standard_dataclass(); default_factories()"
+    for _ in range(2):  # writing the bytecode, then reading it
+        _run(f"from tests.test_records import *; {checks}", env)
+
+
+def test_compiled_where_bytecode_is_neither_kept_nor_there(tmp_path: Path) -> None:
+    """With PYTHONDONTWRITEBYTECODE and no `.pyc`, a `_records/` module would be compiled from
+    source on every run: the methods are compiled one by one as dataclasses does instead."""
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", PYTHONPYCACHEPREFIX=str(tmp_path))
+    code = (
+        "import sys; from swarmgen.span import Span; from swarmgen import records\n"
+        "assert Span.__init__.__code__.co_filename == '<string>'\n"
+        "assert not any(m.startswith(records.PACKAGE + '.') for m in sys.modules)"
+    )
+    _run(code, env)
 
 
 @dataclasses.dataclass(frozen=True, slots=True)
@@ -85,7 +116,8 @@ class _PlainSpan:
     path: str = ""
 
 
-def test_it_behaves_as_the_standard_dataclass() -> None:
+def behaves_as_the_standard_dataclass() -> None:
+    """Span (a `records.dataclass`) against the same class made by `dataclasses` alone."""
     span = Span("m.xmi", 3, 4, "id1", "a/b")
     plain = _PlainSpan("m.xmi", 3, 4, "id1", "a/b")
     assert repr(span) == repr(plain).replace("_PlainSpan", "Span")
@@ -110,11 +142,17 @@ def test_it_behaves_as_the_standard_dataclass() -> None:
             assert (file, line) == ("m.xmi", 3)
 
 
-def test_default_factories_make_a_new_value_each_time() -> None:
-    assert Manifest.__init__.__code__.co_filename == str(records.DIRECTORY / "outtree.py")
+def default_factories() -> None:
+    """A default factory makes a new value for each instance."""
     first, second = Manifest("compile", "m.xmi", {}), Manifest("compile", "m.xmi", {})
     assert first.pending == second.pending == {} and first.pending is not second.pending
     assert Manifest("graph", "s", {}, {"a": "b"}).pending == {"a": "b"}
+
+
+def test_it_behaves_as_the_standard_dataclass() -> None:
+    """In this process (precompiled or not, as its bytecode settings make it)."""
+    behaves_as_the_standard_dataclass()
+    default_factories()
 
 
 def test_a_class_not_in_records_is_compiled_as_before() -> None:

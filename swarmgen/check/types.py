@@ -9,7 +9,6 @@ Type classes: `number`, `bool`, `string`, `null`, a data type's or an enumeratio
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Iterator, Mapping
 
 from swarmgen import diagnostics as dg
@@ -340,7 +339,9 @@ def _report(typer: _Typer, span: Span) -> list[Diagnostic]:
     found = [dg.TYPE_ERROR.at(span, error=message) for message in _unique(typer.errors)]
     for enum, literal, text in dict.fromkeys(typer.literals):
         literals = typer.scope.enums.get(enum, ())
-        close = difflib.get_close_matches(literal, literals, n=1)
+        from difflib import get_close_matches  # an unknown literal only
+
+        close = get_close_matches(literal, literals, n=1)
         values = {"enum": enum, "literal": literal, "text": text}
         if close:
             found.append(dg.UNKNOWN_LITERAL.at(span, suggestion=close[0], **values))

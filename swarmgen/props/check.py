@@ -8,7 +8,6 @@ with a hint (the closest name). `verify --property TEXT` checks its text the sam
 
 from __future__ import annotations
 
-import difflib
 from dataclasses import field, replace
 
 from swarmgen import diagnostics as dg
@@ -131,7 +130,9 @@ def _datum(atom: Datum, vocab: Vocabulary) -> list[Problem]:
 
 def _unknown(what: str, name: str, known: object, offset: int) -> Problem:
     names = sorted(str(n) for n in known)  # type: ignore[attr-defined]
-    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+    from difflib import get_close_matches  # an unknown name only
+
+    close = get_close_matches(name, names, n=1, cutoff=0.6)
     hint = f"did you mean '{close[0]}'?" if close else f"choose from: {', '.join(names) or 'none'}"
     return Problem(offset, f"no {what} '{name}'", hint)
 
