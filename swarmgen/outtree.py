@@ -281,6 +281,8 @@ def _refuse_conflicts(target: Path, existing: Existing, new: Iterable[str]) -> N
             "move them away (or delete them) to regenerate"
         )
     kept = existing.user
+    if not (kept or existing.user_directories or existing.directories):
+        return  # a new or empty directory: nothing in it can stand where a file goes
     blocked = set()
     for relative in new:
         parents = {str(p) for p in PurePosixPath(relative).parents if str(p) != "."}
@@ -343,13 +345,16 @@ def _stage(files: Tree, target: Path) -> Path:
     staging = Path(_mkdtemp(prefix=_staging_prefix(target), dir=target.parent))
     try:
         (staging / MANIFEST).write_bytes(_bytes(files[PurePosixPath(MANIFEST)]))
+        made = {staging}  # the directories made so far: each is made once
         for relative, content in sorted(files.items()):
             if str(relative) == MANIFEST:
                 continue
             if not _safe_relative(str(relative)):
                 raise OutputError(f"refusing to write outside the output directory: {relative}")
             path = staging / relative
-            path.parent.mkdir(parents=True, exist_ok=True)
+            if path.parent not in made:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                made.add(path.parent)
             path.write_bytes(_bytes(content))
     except BaseException:
         _remove_listed(staging, None)
