@@ -178,3 +178,30 @@ def test_the_standard_library_is_left_as_it_was() -> None:
             b: str  # type: ignore[misc]
 
     assert dataclasses._create_fn is records._CREATE_FN  # type: ignore[attr-defined]
+
+
+def test_the_command_line_process_precompiles_every_covered_dataclass(tmp_path: Path) -> None:
+    """`install` (the console entry point's): the vendored runtime's and pydantic's dataclasses,
+    whose modules do not use `records.dataclass`, take their methods from `_records/` too."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPYCACHEPREFIX"] = str(tmp_path)
+    code = (
+        "from swarmgen import records; records.install()\n"
+        "import annotated_types, swarmgen.runtime.faults as faults\n"
+        "from swarmgen.span import Span\n"
+        "for cls in (annotated_types.Gt, faults.Partition, Span):\n"
+        "    path = cls.__init__.__code__.co_filename\n"
+        "    assert path.startswith(str(records.DIRECTORY)), (cls, path)\n"
+        "assert annotated_types.Gt(1) == annotated_types.Gt(1) and repr(annotated_types.Gt(1))"
+        " == 'Gt(gt=1)'\n"
+    )
+    for _ in range(2):  # writing the bytecode, then reading it
+        _run(code, env)
+
+
+def test_only_swarmgen_and_the_pinned_packages_are_covered() -> None:
+    assert records.covered("swarmgen.chart.model") and records.covered("pydantic.fields")
+    assert records.covered("annotated_types")
+    assert not records.covered("jinja2.nodes") and not records.covered("swarmgen")
+    assert records.record_module("swarmgen.chart.model") == "swarmgen._records.chart__model"
+    assert records.record_module("pydantic.fields") == "swarmgen._records.ext__pydantic__fields"
