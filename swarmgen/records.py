@@ -156,7 +156,7 @@ def _dataclass(cls: type[Any] | None = None, /, **options: Any) -> Any:
 
 def install() -> None:
     """Every dataclass made from now on in this process takes its methods from `_records/`
-    where they are there (`cli.run`: the process is the command's alone)."""
+    where they are (`cli.run`: the process is the command's alone)."""
     global _installed
     if _CREATE_FN is not None:
         dataclasses._create_fn = _create_fn  # type: ignore[attr-defined]
@@ -226,6 +226,8 @@ def build(directory: Path = DIRECTORY, log: Callable[[str], Any] = print) -> lis
             continue  # a dataclass of another package made while ours were recorded
         texts = list(dict.fromkeys(recorded[module]))  # in order, each once
         target = directory / f"{record_module(module).rsplit('.', 1)[1]}.py"
+        if target in written:  # `a.b__c` and `a__b.c` would share one: rename a module
+            raise RuntimeError(f"two modules map to {target.name}")
         target.write_text(module_text(module, texts), encoding="utf-8")
         written.append(target)
     for stale in set(directory.glob("*.py")) - set(written):
