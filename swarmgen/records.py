@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import functools
 import importlib
 import os
 import sys
@@ -81,25 +82,22 @@ def _table(module: str) -> Mapping[str, types.CodeType]:
     if found is None:
         if not covered(module):
             return {}
-        name = record_module(module)
         found = {}
-        if _bytecode_kept(name):
+        if _from_bytecode():
             with contextlib.suppress(ModuleNotFoundError):  # a module without dataclasses
-                found = importlib.import_module(name).FUNCTIONS
+                found = importlib.import_module(record_module(module)).FUNCTIONS
         _TABLES[module] = found
     return found
 
 
-def _bytecode_kept(name: str) -> bool:
-    """Whether importing module `name` will not compile it: its bytecode is cached, or will be
-    once compiled. Where bytecode is neither there nor written (PYTHONDONTWRITEBYTECODE and no
-    `.pyc`), compiling a whole `_records/` module costs more than the methods it holds."""
-    if not sys.dont_write_bytecode:
-        return True
-    import importlib.util
-
-    spec = importlib.util.find_spec(name)
-    return spec is not None and spec.cached is not None and os.path.exists(spec.cached)
+@functools.cache
+def _from_bytecode() -> bool:
+    """Whether `_records/` imports from bytecode: its package's `.pyc` is there once the package
+    is imported (cached before, or written then). Where it is not (PYTHONDONTWRITEBYTECODE, or a
+    read-only install without `.pyc`), each module would be compiled from source in every
+    process, which costs more than compiling the methods it holds, as `dataclasses` does."""
+    cached = getattr(importlib.import_module(PACKAGE), "__cached__", None)
+    return isinstance(cached, str) and os.path.exists(cached)
 
 
 def _create_fn(

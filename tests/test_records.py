@@ -93,10 +93,19 @@ def test_precompiled_in_a_process_that_keeps_bytecode(tmp_path: Path) -> None:
         _run(f"from tests.test_records import *; {checks}", env)
 
 
-def test_compiled_where_bytecode_is_neither_kept_nor_there(tmp_path: Path) -> None:
-    """With PYTHONDONTWRITEBYTECODE and no `.pyc`, a `_records/` module would be compiled from
-    source on every run: the methods are compiled one by one as dataclasses does instead."""
-    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", PYTHONPYCACHEPREFIX=str(tmp_path))
+@pytest.mark.parametrize("unwritable", [False, True])
+def test_compiled_where_bytecode_is_neither_kept_nor_there(
+    tmp_path: Path, unwritable: bool
+) -> None:
+    """With PYTHONDONTWRITEBYTECODE, or where `.pyc` cannot be written, and none there, a
+    `_records/` module would be compiled from source on every run: the methods are compiled one
+    by one as dataclasses does instead."""
+    if unwritable:  # the cache prefix lies under a regular file: no directory can be made there
+        (tmp_path / "file").write_text("")
+        env = dict(os.environ, PYTHONPYCACHEPREFIX=str(tmp_path / "file" / "pyc"))
+        env.pop("PYTHONDONTWRITEBYTECODE", None)
+    else:
+        env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", PYTHONPYCACHEPREFIX=str(tmp_path))
     code = (
         "import sys; from swarmgen.span import Span; from swarmgen import records\n"
         "assert Span.__init__.__code__.co_filename == '<string>'\n"
