@@ -9,7 +9,7 @@ STUDY_STAMP := $(VENV)/.study-installed
 SAMPLES := $(sort $(wildcard sample_models/*/*.xmi))
 SYSTEM_PYTHON := /usr/bin/python3
 
-.PHONY: study demo test lint typecheck typecheck-bare pytest generated check-generated golden schema templates sysdeps ros bench bench-ros clean
+.PHONY: study demo test lint typecheck typecheck-bare pytest generated check-generated golden schema templates records sysdeps ros bench bench-ros clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -98,6 +98,10 @@ schema: $(STAMP)
 ## templates: recompile swarmgen/_templates/ (the shipped templates as Python, swarmgen/precompiled.py)
 templates: $(STAMP)
 	$(BIN)/python -m swarmgen.precompiled
+
+## records: rewrite swarmgen/_records/ (the dataclasses' methods as Python, swarmgen/records.py)
+records: $(STAMP)
+	$(BIN)/python -m swarmgen.records
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_compile.py

@@ -15,12 +15,12 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Iterator, MutableMapping
-from dataclasses import dataclass
 from importlib import import_module
 
 import click
 
-from swarmgen import __version__, collector, console
+from swarmgen import __version__, collector, console, records
+from swarmgen.records import dataclass
 
 
 @dataclass(frozen=True)
@@ -152,6 +152,7 @@ def run() -> None:
     that closes early ends nothing, a stdout that cannot be written is one error line (exit 2)."""
     console.install()
     collector.process_ends_after_command()
+    records.install()  # the process is the command's: every dataclass's methods precompiled
     code: int
     try:
         main(standalone_mode=True)

@@ -20,7 +20,6 @@ The rules (docs/security.md):
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import errno
 import hashlib
 import json
@@ -28,13 +27,13 @@ import os
 import re
 import stat
 import sys
-import tempfile
 from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path, PurePosixPath
 
 from swarmgen import __version__
 from swarmgen.errors import SwarmgenError
+from swarmgen.records import dataclass
 
 MANIFEST = ".swarmgen.json"
 FORMAT = 1
@@ -282,6 +281,8 @@ def _refuse_conflicts(target: Path, existing: Existing, new: Iterable[str]) -> N
             "move them away (or delete them) to regenerate"
         )
     kept = existing.user
+    if not (kept or existing.user_directories or existing.directories):
+        return  # a new or empty directory: nothing in it can stand where a file goes
     blocked = set()
     for relative in new:
         parents = {str(p) for p in PurePosixPath(relative).parents if str(p) != "."}
@@ -306,7 +307,7 @@ def preflight(out_dir: Path, command: str) -> Path:
         _clear_debris(target)
         inspect(target, command)
         target.parent.mkdir(parents=True, exist_ok=True)
-        os.rmdir(tempfile.mkdtemp(prefix=_staging_prefix(target), dir=target.parent))  # writable?
+        os.rmdir(_mkdtemp(prefix=_staging_prefix(target), dir=target.parent))  # writable?
         return target
 
 
@@ -341,16 +342,19 @@ def _reported(out_dir: Path) -> Iterator[None]:
 def _stage(files: Tree, target: Path) -> Path:
     """The new tree in a sibling directory, its manifest written first so that debris of a kill
     lists what it holds."""
-    staging = Path(tempfile.mkdtemp(prefix=_staging_prefix(target), dir=target.parent))
+    staging = Path(_mkdtemp(prefix=_staging_prefix(target), dir=target.parent))
     try:
         (staging / MANIFEST).write_bytes(_bytes(files[PurePosixPath(MANIFEST)]))
+        made = {staging}  # the directories made so far: each is made once
         for relative, content in sorted(files.items()):
             if str(relative) == MANIFEST:
                 continue
             if not _safe_relative(str(relative)):
                 raise OutputError(f"refusing to write outside the output directory: {relative}")
             path = staging / relative
-            path.parent.mkdir(parents=True, exist_ok=True)
+            if path.parent not in made:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                made.add(path.parent)
             path.write_bytes(_bytes(content))
     except BaseException:
         _remove_listed(staging, None)
@@ -360,6 +364,14 @@ def _stage(files: Tree, target: Path) -> Path:
 
 def _staging_prefix(target: Path) -> str:
     return f".{target.name[:100]}.swarmgen-new-"  # the sibling's name must fit in 255 bytes
+
+
+def _mkdtemp(prefix: str, dir: Path) -> str:
+    """`tempfile.mkdtemp`, imported when a tree is written: the pipeline imports this module for
+    `validate` too, and tempfile brings shutil, bz2 and lzma."""
+    import tempfile
+
+    return tempfile.mkdtemp(prefix=prefix, dir=dir)
 
 
 def _commit(staging: Path, target: Path, existing: Existing, manifest: Manifest) -> None:
@@ -384,6 +396,8 @@ def _exchange(staging: Path, target: Path) -> bool:
     if not sys.platform.startswith("linux"):
         return False
     os.chmod(staging, stat.S_IMODE(target.stat().st_mode))
+    import ctypes  # only to replace a tree: `validate` imports this module too
+
     libc = ctypes.CDLL(None, use_errno=True)
     if not hasattr(libc, "renameat2"):
         return False

@@ -5,18 +5,16 @@ Nothing below this module prints or writes files. The CLI and the tests both cal
 
 from __future__ import annotations
 
-import difflib
 import gc
 import json
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING
 
 from swarmgen import __version__, check, outtree
 from swarmgen import diagnostics as dg
-from swarmgen.backends import SCXML, ScxmlOutput, registry, selection
 from swarmgen.chart import checks as chart_checks
 from swarmgen.chart.lower import lower
 from swarmgen.chart.model import Chart
@@ -26,6 +24,7 @@ from swarmgen.generated import header, markdown_cell
 from swarmgen.ir import query
 from swarmgen.ir.build import build
 from swarmgen.ir.nodes import Model
+from swarmgen.records import dataclass
 from swarmgen.ros.idl_index import InterfaceIndex, default_roots
 
 if TYPE_CHECKING:
@@ -136,6 +135,8 @@ def compile_model(
 def _compile(
     path: Path, backends: Sequence[str] | None, interfaces: Sequence[Path] = ()
 ) -> Compilation:
+    from swarmgen.backends import SCXML, ScxmlOutput, registry, selection
+
     validation = _validate(path, interfaces)
     if validation.model is None or dg.has_errors(validation.diagnostics):
         return Compilation(validation, {})
@@ -209,10 +210,12 @@ def write_tree(files: Files, out_dir: Path) -> None:
 def diff_tree(files: Files, out_dir: Path) -> str:
     """Unified diff between what would be generated and what `out_dir` holds of swarmgen's
     ('' if equal); files swarmgen did not write are not compared (a compile keeps them)."""
+    from difflib import unified_diff
+
     chunks: list[str] = []
     for relative, old, new in outtree.diff_pairs(files, out_dir):
         chunks.extend(
-            difflib.unified_diff(
+            unified_diff(
                 _lines(old),
                 _lines(new),
                 fromfile=f"a/{relative}" if old is not None else "/dev/null",

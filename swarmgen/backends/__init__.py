@@ -9,9 +9,10 @@ folder of the output directory. Logic lives in Python view models; templates sta
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 from pathlib import PurePosixPath
 from typing import TYPE_CHECKING, Protocol
+
+from swarmgen.records import dataclass
 
 if TYPE_CHECKING:  # annotations only: `compile --help` must not import pydantic and the charts
     from swarmgen.chart.model import Chart

@@ -24,7 +24,7 @@ import io
 import re
 import tokenize
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from swarmgen.backends.pyblank import Entry, blank_lines
 from swarmgen.backends.pyknown import laid_out
@@ -44,6 +44,7 @@ from swarmgen.backends.pysplit import (
     transform,
     width,
 )
+from swarmgen.records import dataclass
 
 __all__ = [
     "LINE_LENGTH",

@@ -29,9 +29,9 @@ import functools
 import keyword
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 from swarmgen.backends import pyformat, pyknown
+from swarmgen.records import dataclass
 
 INDENT = "    "
 LINE_LENGTH = pyformat.LINE_LENGTH

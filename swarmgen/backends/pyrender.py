@@ -8,13 +8,14 @@ from __future__ import annotations
 
 import ast
 import functools
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 from swarmgen import expr
 from swarmgen.backends import pyformat, pyknown, pylayout
 from swarmgen.chart import model as c
 from swarmgen.names import identifier
+from swarmgen.records import dataclass
 from swarmgen.runtime.values import zero_like
 
 LINE_LENGTH = pyformat.LINE_LENGTH

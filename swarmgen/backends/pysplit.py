@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import tokenize
 import unicodedata
-from dataclasses import dataclass, field
+from dataclasses import field
+
+from swarmgen.records import dataclass
 
 LINE_LENGTH = 100
 INDENT = "    "

@@ -23,7 +23,6 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass
 from pathlib import PurePosixPath
 from typing import Any
 
@@ -50,6 +49,7 @@ from swarmgen.generated import header, markdown_cell, xml_text
 from swarmgen.ir.nodes import Model
 from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import doc_text, one_line, ros_name
+from swarmgen.records import dataclass
 from swarmgen.render import render
 from swarmgen.ros.idl_index import InterfaceIndex
 from swarmgen.ros.interfaces import (

@@ -13,11 +13,11 @@ Anything else keeps the generated private action, as before.
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
 from pathlib import PurePosixPath
 
 from swarmgen.ir.nodes import Behaviour, Model
 from swarmgen.names import one_line, ros_name
+from swarmgen.records import dataclass
 from swarmgen.ros.idl import InterfaceDef
 from swarmgen.ros.idl_bind import Binding, Renames, bind
 from swarmgen.ros.idl_index import InterfaceIndex

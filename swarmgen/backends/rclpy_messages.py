@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Collection, Iterable
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from swarmgen.backends.rclpy_declared import Blanks, enum_blanks
 from swarmgen.ir.nodes import DataType, Model
 from swarmgen.names import identifier, one_line, ros_name
+from swarmgen.records import dataclass
 from swarmgen.ros.idl_bind import Renames, renames_of
 from swarmgen.ros.interfaces import (
     check_field_name,

@@ -7,7 +7,6 @@ of service and topic bindings) are reserved, so no generated parameter takes the
 from __future__ import annotations
 
 from collections.abc import Collection, Iterable, Mapping
-from dataclasses import dataclass
 from typing import Any
 
 from swarmgen.backends.pyrender import py_literal
@@ -16,6 +15,7 @@ from swarmgen.chart.model import BehaviourInfo, Chart
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.ir.primitives import primitive
 from swarmgen.names import IdAllocator, ros_name
+from swarmgen.records import dataclass
 from swarmgen.ros.idl_bind import Renames
 from swarmgen.ros.interfaces import interface_type
 

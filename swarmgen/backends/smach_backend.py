@@ -6,7 +6,7 @@ runs it with the same engine. See docs/smach.md for the mapping."""
 from __future__ import annotations
 
 import keyword
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from swarmgen import expr
 from swarmgen.backends import pylayout
@@ -22,6 +22,7 @@ from swarmgen.backends.pyrender import (
 from swarmgen.chart import model as c
 from swarmgen.chart.model import Chart
 from swarmgen.names import IdAllocator, identifier, one_line, ros_name
+from swarmgen.records import dataclass
 from swarmgen.render import render
 
 SMACH_RUNTIME = (*RUNTIME_MODULES, "smach_states", "smach_containers", "smach_chart", "smach")

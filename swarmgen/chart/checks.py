@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
 from swarmgen import expr
@@ -26,6 +25,7 @@ from swarmgen.chart import model as c
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model, State
 from swarmgen.ir.query import walk
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 

@@ -4,7 +4,7 @@ vertex ids, decided once per chart before any node is built."""
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from swarmgen.chart import values
 from swarmgen.ir.nodes import (
@@ -22,6 +22,7 @@ from swarmgen.ir.nodes import (
 )
 from swarmgen.ir.query import ModelIndex, Placed, incoming, outgoing, walk
 from swarmgen.names import IdAllocator, identifier, qualified
+from swarmgen.records import dataclass
 
 SKIPPED = {PseudoKind.INITIAL, PseudoKind.JOIN, PseudoKind.TERMINATE}  # no node of their own
 

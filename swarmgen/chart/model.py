@@ -5,11 +5,12 @@ rendered from this one structure, so they agree on structure and names by constr
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any, Literal
 
 from swarmgen import expr
 from swarmgen.ir.nodes import Value
+from swarmgen.records import dataclass
 
 NodeKind = Literal["state", "parallel", "final", "history"]
 

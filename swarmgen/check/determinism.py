@@ -11,7 +11,7 @@ out are reported once per group as undecided (a note, SG132), never searched on.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 from swarmgen import diagnostics as dg
@@ -31,6 +31,7 @@ from swarmgen.check.guards import (
 from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model, PseudoKind, Pseudostate, Transition, TriggerKind
 from swarmgen.ir.query import walk
+from swarmgen.records import dataclass
 
 # Guard nodes evaluated per model, about 0.25 s: a valuation costs the size of both guards, a
 # pair test PAIR_COST (measured: it takes as long as evaluating 30 nodes). 40 guarded transitions

@@ -12,10 +12,10 @@ from __future__ import annotations
 import itertools
 import operator
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 from swarmgen import expr
+from swarmgen.records import dataclass
 
 MAX_VALUATIONS = 20_000  # per pair: past it, the pair counts as exclusive (as it always did)
 

@@ -18,7 +18,7 @@ final state is reached within the same run, which the simulation follows).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from swarmgen import diagnostics as dg
 from swarmgen import expr
@@ -36,6 +36,7 @@ from swarmgen.ir.nodes import (
 )
 from swarmgen.ir.query import ModelIndex, Placed, initial_of, outgoing, walk
 from swarmgen.names import event_name
+from swarmgen.records import dataclass
 
 MAX_QUEUE = 32  # internal events pending: past this the run is not followed further
 _TRANSIENT = {PseudoKind.CHOICE, PseudoKind.JUNCTION}

@@ -9,9 +9,7 @@ Type classes: `number`, `bool`, `string`, `null`, a data type's or an enumeratio
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
 from swarmgen import expr
@@ -19,6 +17,7 @@ from swarmgen.diagnostics import Diagnostic
 from swarmgen.ir.nodes import Model, Property, State, Transition, TriggerKind
 from swarmgen.ir.primitives import Primitive, primitive
 from swarmgen.ir.query import ModelIndex, walk
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 # primitive type -> its type class (Real and Integer are both numbers in every target)
@@ -340,7 +339,9 @@ def _report(typer: _Typer, span: Span) -> list[Diagnostic]:
     found = [dg.TYPE_ERROR.at(span, error=message) for message in _unique(typer.errors)]
     for enum, literal, text in dict.fromkeys(typer.literals):
         literals = typer.scope.enums.get(enum, ())
-        close = difflib.get_close_matches(literal, literals, n=1)
+        from difflib import get_close_matches  # an unknown literal only
+
+        close = get_close_matches(literal, literals, n=1)
         values = {"enum": enum, "literal": literal, "text": text}
         if close:
             found.append(dg.UNKNOWN_LITERAL.at(span, suggestion=close[0], **values))

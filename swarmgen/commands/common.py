@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import os
 import sys
-import traceback
 from collections.abc import Callable, Sequence
 from functools import wraps
 from pathlib import Path
@@ -46,6 +45,8 @@ def guarded(command: Callable[P, R]) -> Callable[P, R]:
                 err=True,
             )
             if _debug():
+                import traceback  # only then: it imports textwrap, linecache, tokenize
+
                 traceback.print_exc()
             sys.exit(INTERNAL_ERROR)
 

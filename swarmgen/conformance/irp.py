@@ -16,7 +16,6 @@ import heapq
 import shutil
 import tempfile
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +24,7 @@ from lxml import etree
 from swarmgen import __version__, pipeline
 from swarmgen import diagnostics as dg
 from swarmgen.conformance.features import feature
+from swarmgen.records import dataclass
 from swarmgen.runtime.chart import Call, Chart, Node
 from swarmgen.runtime.engine import Engine
 from swarmgen.runtime.host import Event

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import string
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from enum import IntEnum, StrEnum
 
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 DEFAULT = "default"  # the name of a code's usual message; other wordings are named variants

@@ -5,11 +5,11 @@ from __future__ import annotations
 import math
 import re
 import string
-from dataclasses import dataclass
 from typing import Literal, NoReturn
 
 from swarmgen.expr.errors import error_at, show
 from swarmgen.expr.tree import MAX_INT, Value
+from swarmgen.records import dataclass
 
 TokKind = Literal["num", "str", "word", "op", "nl", "eof"]
 

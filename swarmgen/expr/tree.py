@@ -1,7 +1,5 @@
 """The expression language's tree: limits, operator precedence, nodes, and queries over them."""
 
-from __future__ import annotations
-
 import math
 import re
 from collections.abc import Iterable, Iterator
@@ -87,13 +85,13 @@ def _check_value(value: Value) -> Value:
     return value
 
 
-def _not_else(value: Expr) -> Expr:
+def _not_else(value: "Expr") -> "Expr":
     if isinstance(value, Else):
         raise ValueError("`else` can only be a whole guard")
     return value
 
 
-def _path(value: Expr) -> Expr:
+def _path(value: "Expr") -> "Expr":
     if not isinstance(value, Name | EventField | Attr | System):
         raise ValueError("attribute access needs a name on the left")
     return value
@@ -179,7 +177,7 @@ class Attr(_Model):
     """``obj.name`` where obj is a name, an event field or another attribute access."""
 
     kind: Literal["attr"] = "attr"
-    obj: Annotated[Expr, AfterValidator(_path)]
+    obj: Annotated["Expr", AfterValidator(_path)]
     name: Ident
 
 
@@ -187,7 +185,7 @@ class ListOf(_Model):
     """``[a, b, ...]``: a sequence of the items' values (what `for` iterates, W3C's arrays)."""
 
     kind: Literal["list"] = "list"
-    items: tuple[Operand, ...] = ()
+    items: tuple["Operand", ...] = ()
 
 
 class Unary(_Model):
@@ -195,7 +193,7 @@ class Unary(_Model):
 
     kind: Literal["unary"] = "unary"
     op: UnOp
-    operand: Operand
+    operand: "Operand"
 
 
 class Binary(_Model):
@@ -203,8 +201,8 @@ class Binary(_Model):
 
     kind: Literal["binary"] = "binary"
     op: BinOp
-    left: Operand
-    right: Operand
+    left: "Operand"
+    right: "Operand"
 
 
 class StartsWith(_Model):
@@ -212,8 +210,8 @@ class StartsWith(_Model):
     (both strings: another value is an error when it runs, error.execution)."""
 
     kind: Literal["startswith"] = "startswith"
-    text: Operand
-    prefix: Operand
+    text: "Operand"
+    prefix: "Operand"
 
 
 class Else(_Model):
@@ -348,7 +346,7 @@ class Branch(_Model):
     """One branch of an `if`: its condition (None: `else`) and its actions."""
 
     cond: Operand | None = None
-    actions: tuple[Action, ...] = ()
+    actions: tuple["Action", ...] = ()
 
 
 class If(_Model):
@@ -364,7 +362,7 @@ class Block(_Model):
     block of its own); only at the top of an entry or exit behaviour."""
 
     kind: Literal["block"] = "block"
-    actions: tuple[Action, ...] = ()
+    actions: tuple["Action", ...] = ()
 
 
 class ForEach(_Model):
@@ -375,7 +373,7 @@ class ForEach(_Model):
     array: Operand
     item: DataName
     index: DataName | None = None
-    actions: tuple[Action, ...] = ()
+    actions: tuple["Action", ...] = ()
 
 
 Action = Annotated[

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import importlib
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import cast
 
@@ -20,6 +19,7 @@ from swarmgen.diagnostics import Diagnostic
 from swarmgen.frontend.raw import RawModel
 from swarmgen.frontend.safexml import InputError, decoded, node_line, parse_safely, read_bounded
 from swarmgen.frontend.xmi import is_xmi_root
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 Loaded = tuple[RawModel | None, list[Diagnostic]]

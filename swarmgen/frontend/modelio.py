@@ -14,7 +14,7 @@ element `EXT`, or a zip's magic bytes.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +27,7 @@ from swarmgen.frontend.modelio_graph import MObject, Ref, index_objects, read_ex
 from swarmgen.frontend.raw import RawElement, RawModel, StereotypeApplication
 from swarmgen.frontend.safexml import InputError, decoded, parse_safely
 from swarmgen.frontend.scxml_raw import Builder
+from swarmgen.records import dataclass
 
 Loaded = tuple[RawModel | None, list[Diagnostic]]
 Parsed = tuple[etree._ElementTree, str, str]  # (tree, source text, shown name)

@@ -11,13 +11,14 @@ References carry the target's name and metaclass, so a reader can name what it c
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from lxml import etree
 
 from swarmgen import diagnostics as dg
 from swarmgen.frontend.safexml import InputError
 from swarmgen.frontend.scxml_raw import Builder
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 

@@ -16,10 +16,10 @@ import stat
 import struct
 import zipfile
 import zlib
-from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
 from swarmgen.frontend.safexml import InputError, quoted
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 ZIP_MAGIC = b"PK\x03\x04"

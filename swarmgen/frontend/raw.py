@@ -6,8 +6,9 @@ It is deliberately generic (no UML semantics beyond type inference): `ir.build` 
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import field
 
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from lxml import etree
 
@@ -22,6 +22,7 @@ from swarmgen.frontend.scxml_expr import (
 )
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, in_sg, local
 from swarmgen.frontend.scxml_send import Sends
+from swarmgen.records import dataclass
 
 # a location's root: a name, then its members (`a.b`, `a["b"]`) or nothing
 _LOCATION_ROOT = re.compile(r"\s*([A-Za-z_$][A-Za-z0-9_$]*)\s*(?:[.\[].*)?", re.DOTALL)

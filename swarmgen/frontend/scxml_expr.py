@@ -12,9 +12,9 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from swarmgen import expr
+from swarmgen.records import dataclass
 
 MAX_TEXT = expr.MAX_TEXT
 _TOKEN = re.compile(

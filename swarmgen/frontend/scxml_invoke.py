@@ -10,7 +10,7 @@ The inline children are detached from the document before anything else reads it
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 
 from lxml import etree
@@ -21,6 +21,7 @@ from swarmgen.frontend.safexml import InputError, decoded, parse_safely, read_bo
 from swarmgen.frontend.scxml_actions import Actions
 from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, local
 from swarmgen.frontend.scxml_send import namelist_field
+from swarmgen.records import dataclass
 
 SCXML_TYPES = frozenset({"http://www.w3.org/TR/scxml/", "http://www.w3.org/TR/scxml", "scxml"})
 MAX_NESTING = 8  # documents invoked inside invoked documents, when read

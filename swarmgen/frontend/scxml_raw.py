@@ -3,7 +3,7 @@ column of the SCXML element each comes from, stereotype applications, located di
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 from lxml import etree
@@ -11,6 +11,7 @@ from lxml import etree
 from swarmgen.diagnostics import Code, Diagnostic
 from swarmgen.frontend.raw import RawElement, StereotypeApplication
 from swarmgen.frontend.safexml import node_line
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 SCXML_NS = "http://www.w3.org/2005/07/scxml"

@@ -9,7 +9,7 @@ every vertex exists (SCXML may name states further down the document).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from lxml import etree
 
@@ -18,6 +18,7 @@ from swarmgen.frontend.raw import RawElement
 from swarmgen.frontend.scxml_actions import Actions
 from swarmgen.frontend.scxml_invoke import Invokes
 from swarmgen.frontend.scxml_raw import Builder, children, local, sg
+from swarmgen.records import dataclass
 
 _STATES = ("state", "parallel", "final", "history")
 _KINDS = {"shallow": "shallowHistory", "deep": "deepHistory"}

@@ -8,7 +8,7 @@ children or `href`s. Safe: no DTDs, entities, network or XInclude; size and dept
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import cast
 
@@ -25,6 +25,7 @@ from swarmgen.frontend.safexml import (
     quoted,
     read_bounded,
 )
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 MAX_DEPTH = 200

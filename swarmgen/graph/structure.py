@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import StrEnum
 
 from swarmgen.graph.styles import HARDWARE_STYLES
@@ -11,6 +10,7 @@ from swarmgen.ir import nodes as ir
 from swarmgen.ir.query import ModelIndex
 from swarmgen.ir.query import composition as swarm_composition
 from swarmgen.names import IdAllocator, identifier
+from swarmgen.records import dataclass
 
 COMPOSITION_STEM = "swarm"
 

@@ -3,9 +3,8 @@ Mermaid and DOT renderers so that their legends agree."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from swarmgen.ir import nodes as ir
+from swarmgen.records import dataclass
 
 
 @dataclass(frozen=True)

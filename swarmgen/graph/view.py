@@ -9,7 +9,7 @@ allocated in model order, so the output is deterministic.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from enum import StrEnum
 
 from swarmgen import expr
@@ -20,6 +20,7 @@ from swarmgen.graph.styles import BEHAVIOUR_STYLES
 from swarmgen.ir import nodes as ir
 from swarmgen.ir.query import ModelIndex, connection_owner
 from swarmgen.names import IdAllocator, identifier
+from swarmgen.records import dataclass
 
 
 class GraphError(SwarmgenError):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import field
 from functools import cached_property
 
 from swarmgen import diagnostics as dg
@@ -27,6 +27,7 @@ from swarmgen.ir.nodes import (
     Value,
 )
 from swarmgen.names import identifier
+from swarmgen.records import dataclass
 
 HARDWARE_KINDS = {k.value: k for k in HardwareKind}
 BEHAVIOUR_KINDS = {k.value: k for k in BehaviourKind}

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Literal
 
 from swarmgen import diagnostics as dg
@@ -24,6 +24,7 @@ from swarmgen.ir.nodes import (
     Trigger,
     TriggerKind,
 )
+from swarmgen.records import dataclass
 
 _EVENT_TYPES = {"SignalEvent", "TimeEvent", "CallEvent", "ChangeEvent", "AnyReceiveEvent", "Signal"}
 

@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import math
 import re
-from dataclasses import dataclass
 
 from swarmgen.frontend.raw import RawElement
 from swarmgen.ir.nodes import Value
 from swarmgen.ir.primitives import Primitive, primitive
+from swarmgen.records import dataclass
 
 MAX_SAFE_INTEGER = 2**53 - 1  # ECMAScript holds no larger integer exactly
 

@@ -12,10 +12,10 @@ a misspelling of it.
 
 from __future__ import annotations
 
-import difflib
-from dataclasses import dataclass, field
+from dataclasses import field
 
 from swarmgen.ir.nodes import HardwareComponent, HardwareKind, Model
+from swarmgen.records import dataclass
 from swarmgen.runtime.netoptions import (
     KNOWN_KEYS,
     TRANSPORT_KEYS,
@@ -97,7 +97,9 @@ def _read(component: HardwareComponent, problems: list[Problem]) -> dict[str, st
             except ValueError as err:
                 problems.append(Problem(component, "value", {"component": name, "error": str(err)}))
         elif key not in KNOWN_KEYS:
-            near = difflib.get_close_matches(key, KNOWN_KEYS, n=1, cutoff=0.6)
+            from difflib import get_close_matches  # an unknown key only
+
+            near = get_close_matches(key, KNOWN_KEYS, n=1, cutoff=0.6)
             if near:
                 fields = {"component": name, "key": key, "near": near[0]}
                 problems.append(Problem(component, "misspelt", fields))

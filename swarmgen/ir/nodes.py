@@ -5,8 +5,6 @@ Names are the model's own; `ident` fields hold the safe identifier made from the
 hashable and comparable in tests. References between nodes are by `id` (the xmi:id).
 """
 
-from __future__ import annotations
-
 from enum import StrEnum
 from typing import Annotated, Any, Literal
 
@@ -276,7 +274,7 @@ class Invoke(Node):
     autoforward: bool = False
     params: tuple[Binding, ...] = ()
     finalize: tuple[Action, ...] = ()
-    session: Model
+    session: "Model"
     span: Span
 
 
@@ -286,7 +284,7 @@ class State(Node):
     type: Literal["state"] = "state"
     id: str
     name: str
-    regions: tuple[Region, ...] = ()
+    regions: tuple["Region", ...] = ()
     submachine: str | None = None  # Machine.id, inlined by the emitters
     connection_points: tuple[Pseudostate, ...] = ()  # entry/exit points of a composite state
     connections: tuple[ConnectionRef, ...] = ()

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
 from functools import cached_property
 
 from swarmgen.ir.nodes import (
@@ -21,6 +20,7 @@ from swarmgen.ir.nodes import (
     Transition,
     Vertex,
 )
+from swarmgen.records import dataclass
 
 
 @dataclass(frozen=True)

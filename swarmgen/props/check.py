@@ -8,8 +8,7 @@ with a hint (the closest name). `verify --property TEXT` checks its text the sam
 
 from __future__ import annotations
 
-import difflib
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import codes_verify as cv
@@ -18,6 +17,7 @@ from swarmgen.ir.nodes import FinalState, Model, State, SwarmProperty
 from swarmgen.ir.query import walk
 from swarmgen.props.parse import parse_property
 from swarmgen.props.tree import Count, Datum, InState, Occurs, Property, property_atoms
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 
 _NUMBERS = frozenset({"Integer", "Real", "UnlimitedNatural"})
@@ -130,7 +130,9 @@ def _datum(atom: Datum, vocab: Vocabulary) -> list[Problem]:
 
 def _unknown(what: str, name: str, known: object, offset: int) -> Problem:
     names = sorted(str(n) for n in known)  # type: ignore[attr-defined]
-    close = difflib.get_close_matches(name, names, n=1, cutoff=0.6)
+    from difflib import get_close_matches  # an unknown name only
+
+    close = get_close_matches(name, names, n=1, cutoff=0.6)
     hint = f"did you mean '{close[0]}'?" if close else f"choose from: {', '.join(names) or 'none'}"
     return Problem(offset, f"no {what} '{name}'", hint)
 

@@ -18,8 +18,9 @@ Trees are frozen dataclasses: properties are parsed once per model and never cha
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal
+
+from swarmgen.records import dataclass
 
 Comparison = Literal["==", "!=", "<", "<=", ">", ">="]
 Quantifier = Literal["some", "every"]

@@ -10,8 +10,9 @@ is `pkg/Name`, or `Name` in the definition's own package (ROS 2 has no special `
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
 from typing import Literal
+
+from swarmgen.records import dataclass
 
 Kind = Literal["msg", "srv", "action"]
 KINDS: tuple[Kind, ...] = ("msg", "srv", "action")

@@ -6,14 +6,14 @@ definitions come from an `InterfaceIndex`; shared by the check and the rclpy bac
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any, Literal
 
 from swarmgen.ir.nodes import Behaviour, DataType, Enumeration, Property
 from swarmgen.ir.primitives import Primitive, primitive
 from swarmgen.names import ros_name
+from swarmgen.records import dataclass
 from swarmgen.ros.idl import (
     FLOATS,
     INTEGERS,
@@ -238,7 +238,9 @@ class _Mapper:
         found = section.field(wanted)
         if found is None:
             names = [f.name for f in section.fields]
-            close = difflib.get_close_matches(wanted, names, n=1)
+            from difflib import get_close_matches  # a misspelling only
+
+            close = get_close_matches(wanted, names, n=1)
             values = {
                 "side": side, "name": param.name, "field": wanted, "section": section.name,
                 "type": self.root.key, "suggestion": f"`{close[0]}`" if close else None,

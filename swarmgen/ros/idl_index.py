@@ -14,11 +14,12 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import Literal
 
 from swarmgen.inputs import InputRefused, read_limited
+from swarmgen.records import dataclass
 from swarmgen.ros.idl import Field, IdlError, InterfaceDef, Kind, parse
 
 Origin = Literal["installed", "user", "bundled"]

@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from lxml import etree
 
@@ -18,6 +17,7 @@ from swarmgen.chart import model as c
 from swarmgen.chart.lower import lower
 from swarmgen.ir.nodes import Model, Value
 from swarmgen.names import identifier
+from swarmgen.records import dataclass
 from swarmgen.runtime.chart import FINALIZE_PREFIX, OUTCOME_PREFIX
 from swarmgen.scxml.support import (
     CONTENT_SCRIPT,

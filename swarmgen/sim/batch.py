@@ -33,12 +33,13 @@ import math
 import re
 from collections import deque
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from swarmgen.records import dataclass
 from swarmgen.runtime.chart import Call, Node
 from swarmgen.runtime.engine import FINALIZE_PREFIX, Event
 from swarmgen.runtime.member import InMemoryBus, Request

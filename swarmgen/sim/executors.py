@@ -17,11 +17,11 @@ from __future__ import annotations
 import multiprocessing
 from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
 from types import TracebackType
 from typing import Any, Protocol, TypeVar
 
 from swarmgen.errors import SwarmgenError
+from swarmgen.records import dataclass
 
 T = TypeVar("T")
 R = TypeVar("R")

@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+
+from swarmgen.records import dataclass
 
 INF = int(np.iinfo(np.int32).max)  # "never": a patch not (yet) seen
 I64 = NDArray[np.int64]

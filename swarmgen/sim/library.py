@@ -32,10 +32,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any, Protocol
 
 from swarmgen.ir.primitives import zero_of
+from swarmgen.records import dataclass
 from swarmgen.runtime.member import Request
 from swarmgen.sim.poses import placed, position_of
 from swarmgen.sim.scenario import Scenario

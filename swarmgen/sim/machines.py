@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from swarmgen.records import dataclass
 from swarmgen.runtime.chart import Chart
 from swarmgen.runtime.engine import OUTCOME_PREFIX
 from swarmgen.sim.scenario import SimulationError

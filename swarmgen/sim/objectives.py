@@ -20,11 +20,11 @@ import math
 import re
 import statistics
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, cast
 
 from swarmgen.console import shown
 from swarmgen.errors import SwarmgenError
+from swarmgen.records import dataclass
 from swarmgen.sim.stats import kth, level_name
 
 if TYPE_CHECKING:

@@ -37,11 +37,11 @@ import os
 import socket
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 from swarmgen.console import shown
+from swarmgen.records import dataclass
 from swarmgen.sim import objectives as obj
 from swarmgen.sim import params
 from swarmgen.sim.executors import Executor, LocalExecutor

@@ -29,7 +29,7 @@ import json
 import math
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -37,6 +37,7 @@ from swarmgen import jsonfile
 from swarmgen.console import shown
 from swarmgen.inputs import InputRefused, read_limited
 from swarmgen.ir.primitives import Primitive, primitive
+from swarmgen.records import dataclass
 from swarmgen.sim.limits import MAX_LIST, MAX_RUNS, MAX_VIEW, SCENARIO_BYTES
 from swarmgen.sim.scenario import TIMING_DEFAULTS, Scenario, ScenarioError, parse
 

@@ -25,13 +25,14 @@ import difflib
 import math
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path
 from typing import Any
 
 from swarmgen import jsonfile
 from swarmgen.console import shown
 from swarmgen.errors import SwarmgenError
+from swarmgen.records import dataclass
 from swarmgen.sim.limits import (
     MAX_LIST,
     MAX_MEMBER_RUNS,

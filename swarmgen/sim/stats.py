@@ -10,8 +10,10 @@ import io
 import math
 import statistics
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
+
+from swarmgen.records import dataclass
 
 # Student's t quantile t(0.975, df) for df = 1..30 (two-sided 95 percent).
 _T975 = (

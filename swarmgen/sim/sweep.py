@@ -6,10 +6,11 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from swarmgen.records import dataclass
 from swarmgen.sim.batch import Batch, Config, RunResult
 from swarmgen.sim.executors import Executor, Failure, LocalExecutor
 from swarmgen.sim.heap import kept_heap

@@ -13,12 +13,12 @@ import re
 import sqlite3
 import struct
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from swarmgen.console import shown
+from swarmgen.records import dataclass
 from swarmgen.trace.bag import BAG_SUFFIXES, TraceError
 
 if TYPE_CHECKING:

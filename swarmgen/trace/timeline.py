@@ -19,10 +19,10 @@ import csv
 import io
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from swarmgen.records import dataclass
 from swarmgen.trace.reader import Run
 
 __all__ = [

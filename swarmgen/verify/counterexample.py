@@ -13,10 +13,11 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path
 from typing import Any
 
+from swarmgen.records import dataclass
 from swarmgen.verify.state import thaw
 from swarmgen.verify.system import Message, Step, SwarmState, System, canonical
 

@@ -27,8 +27,9 @@ The search stops at such a state instead of expanding the product (`explore`), a
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import field
 
+from swarmgen.records import dataclass
 from swarmgen.verify.system import Step, System
 
 MAX_LOCAL = 100_000  # values of one member's own graph (beyond it the member is not decoupled)

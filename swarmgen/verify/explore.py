@@ -13,9 +13,10 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import TYPE_CHECKING
 
+from swarmgen.records import dataclass
 from swarmgen.verify.ample import ample
 from swarmgen.verify.decouple import decoupled
 from swarmgen.verify.system import Effect, Step, SwarmState, System, canonical_state

@@ -12,9 +12,10 @@ its input a member also processes the events it queued to itself (`raise e(f = .
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
+from swarmgen.records import dataclass
 from swarmgen.runtime.chart import Action, Chart, Context
 from swarmgen.runtime.engine import FINALIZE_PREFIX, Engine, Event
 from swarmgen.verify.state import (

@@ -24,10 +24,10 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterator
-from dataclasses import dataclass
 
 from swarmgen.graphs import strongly_connected
 from swarmgen.props.tree import Property
+from swarmgen.records import dataclass
 from swarmgen.verify.observe import Graph, Observer
 from swarmgen.verify.system import Step
 

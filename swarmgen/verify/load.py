@@ -5,13 +5,14 @@ station's events, and where the model's states and events are (for located diagn
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 
 from swarmgen import diagnostics as dg
 from swarmgen.errors import SwarmgenError
 from swarmgen.ir.nodes import FinalState, Model, State
 from swarmgen.ir.query import composition, sessions, walk
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 from swarmgen.verify.domains import endings
 from swarmgen.verify.kinds import make_kind

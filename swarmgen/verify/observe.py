@@ -14,7 +14,7 @@ from __future__ import annotations
 import operator
 from array import array
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 from swarmgen.props.tree import (
@@ -30,6 +30,7 @@ from swarmgen.props.tree import (
     Property,
     property_atoms,
 )
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 from swarmgen.verify.state import thaw
 from swarmgen.verify.system import Effect, Step, SwarmState, System

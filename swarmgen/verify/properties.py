@@ -15,11 +15,11 @@ reach a final state, and SG403/SG404 need the whole space (after a bounded searc
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass
 
 from swarmgen import diagnostics as dg
 from swarmgen.diagnostics import codes_verify as cv
 from swarmgen.ir.nodes import Model
+from swarmgen.records import dataclass
 from swarmgen.span import Span
 from swarmgen.verify.counterexample import Trace, active_names, rerun
 from swarmgen.verify.decouple import local

@@ -33,9 +33,10 @@ Each member value's normal form is computed once (`Reducer`, bounded memo).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from swarmgen.records import dataclass
 from swarmgen.runtime.chart import Chart, Node
 from swarmgen.verify.state import EngineState
 

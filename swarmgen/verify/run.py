@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from pathlib import Path
 
 from swarmgen import diagnostics as dg
+from swarmgen.records import dataclass
 from swarmgen.verify import userprops
 from swarmgen.verify.explore import Budget, Search, explore
 from swarmgen.verify.load import Loaded, load

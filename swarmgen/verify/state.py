@@ -17,9 +17,10 @@ to a renamed attribute would otherwise pass silently).
 from __future__ import annotations
 
 import pickle
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
+from swarmgen.records import dataclass
 from swarmgen.runtime.chart import Call, Node
 from swarmgen.runtime.engine import Engine, Event
 

@@ -31,9 +31,10 @@ from __future__ import annotations
 
 from array import array
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import field, replace
 from typing import Any
 
+from swarmgen.records import dataclass
 from swarmgen.verify.kinds import MemberKind
 from swarmgen.verify.reduce import Reducer
 from swarmgen.verify.state import EngineState, Frozen

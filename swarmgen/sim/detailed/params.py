@@ -19,10 +19,11 @@ turn angles. A member type's speed limit and camera radius come from here, else 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 from swarmgen import jsonfile
+from swarmgen.records import dataclass
 from swarmgen.sim.scenario import Scenario, ScenarioError
 
 KINDS = ("uav", "ugv")

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 from swarmgen.backends.rclpy_backend import (
@@ -27,6 +26,7 @@ from swarmgen.backends.rclpy_declared import declared_bindings
 from swarmgen.chart.model import Chart
 from swarmgen.ir.nodes import Model
 from swarmgen.ir.query import ModelIndex
+from swarmgen.records import dataclass
 from swarmgen.ros.idl_index import InterfaceIndex
 from swarmgen.sim.batch import Config, run_draws
 from swarmgen.sim.detailed.params import DetailedParams, MemberParams

@@ -17,9 +17,10 @@ import subprocess
 import threading
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
+
+from swarmgen.records import dataclass
 
 GRACE_S = 3.0  # after SIGTERM, before SIGKILL
 POLL_S = 0.02

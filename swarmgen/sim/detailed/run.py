@@ -20,13 +20,14 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import field
 from pathlib import Path
 from typing import Any
 
 from swarmgen import pipeline
 from swarmgen import ros_harness as harness
 from swarmgen.backends.rclpy_backend import nodes_package
+from swarmgen.records import dataclass
 from swarmgen.ros.domains import lease
 from swarmgen.sim.batch import Config
 from swarmgen.sim.detailed.bags import record_run

@@ -1,0 +1,1 @@
+"""Compiled dataclass methods: see swarmgen/records.py."""
