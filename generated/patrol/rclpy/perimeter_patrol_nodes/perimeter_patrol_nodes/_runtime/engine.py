@@ -66,6 +66,7 @@ class Engine(Sends):
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
         self._tables: Tables = self.chart.tables
+        self._inert = self._tables.inert_names  # names nothing reacts to, in any configuration
         # The value rule: a declared field the sender left out holds its default. Every declared
         # event's filler is made once per chart, so `send` finds it (or no filler) in one look-up.
         self._fillers = self._tables.fillers
@@ -155,7 +156,7 @@ class Engine(Sends):
         if self.sessions is not None and not self.sessions.received(event):
             return  # from a session that was cancelled: discarded
         cfg = self._cfg or self._configuration()
-        selection = cfg.selections.get(name) or cfg.selection(name)
+        selection = cfg.selections.get(name) or self._inert.get(name) or cfg.selection(name)
         now: Configuration | None = cfg
         if selection.chains:
             static = selection.static  # `_choose`'s answer where it evaluates and counts nothing
@@ -249,7 +250,7 @@ class Engine(Sends):
                 return
 
     def _settle(self) -> None:
-        internal = self.internal
+        internal, inert = self.internal, self._inert
         while self.running:
             cfg = self._cfg or self._configuration()
             enabled = self._choose(cfg.eventless) if cfg.eventless.chains else ()
@@ -259,7 +260,7 @@ class Engine(Sends):
                 event = internal.popleft()
                 self.ctx.event = event
                 name = event.name
-                selection = cfg.selections.get(name) or cfg.selection(name)
+                selection = cfg.selections.get(name) or inert.get(name) or cfg.selection(name)
                 if not selection.chains:
                     continue
                 static = selection.static
