@@ -86,6 +86,8 @@ class Engine(Sends):
         # one itself (the invoke ids from the member's session, its number and its parent's).
         invokes = any(n.invokes for n in self.chart.nodes.values())
         self.sessions: Sessions | None = Sessions(self) if invokes else None
+        if self.sessions is None:  # a call less per event: `send` is `_step` itself
+            self.send = self._step  # type: ignore[method-assign]
         self.path: tuple[str, ...] = ()
         self.root_host: Host = self.host
         self.serial = 0
@@ -240,32 +242,29 @@ class Engine(Sends):
     def _macrostep(self) -> None:
         """Microsteps until nothing is enabled, then the behaviours and invokes of the states
         entered start; an error that raised starts another round (W3C mainEventLoop)."""
+        internal, inert = self.internal, self._inert
         while True:
-            self._settle()
+            while self.running:  # the microsteps
+                cfg = self._cfg or self._configuration()
+                enabled = self._choose(cfg.eventless) if cfg.eventless.chains else ()
+                if not enabled:
+                    if not internal:
+                        break
+                    event = internal.popleft()
+                    self.ctx.event = event
+                    name = event.name
+                    selection = cfg.selections.get(name) or inert.get(name) or cfg.selection(name)
+                    if not selection.chains:
+                        continue
+                    static = selection.static
+                    enabled = self._choose(selection) if static is None or self._bounded else static
+                if enabled:
+                    self._microstep(enabled, cfg)
             if not self._to_invoke:
                 return
             self._start_calls()
-            if not self.internal or not self.running:
+            if not internal or not self.running:
                 return
-
-    def _settle(self) -> None:
-        internal, inert = self.internal, self._inert
-        while self.running:
-            cfg = self._cfg or self._configuration()
-            enabled = self._choose(cfg.eventless) if cfg.eventless.chains else ()
-            if not enabled:
-                if not internal:
-                    break
-                event = internal.popleft()
-                self.ctx.event = event
-                name = event.name
-                selection = cfg.selections.get(name) or inert.get(name) or cfg.selection(name)
-                if not selection.chains:
-                    continue
-                static = selection.static
-                enabled = self._choose(selection) if static is None or self._bounded else static
-            if enabled:
-                self._microstep(enabled, cfg)
 
     def _start_calls(self) -> None:
         invoke = self._to_invoke
