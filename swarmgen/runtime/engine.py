@@ -55,8 +55,7 @@ class Engine(Sends):
         self.config: set[Node] = set()
         self.internal: deque[Event] = deque()
         self.history: dict[Node, tuple[Node, ...]] = {}
-        self.running = False
-        self.finished = False
+        self.running, self.finished = False, False
         self._to_invoke: set[Node] = set()
         self._activation: dict[Node, int] = {}
         self._ids = itertools.count(1)
@@ -78,14 +77,11 @@ class Engine(Sends):
         self.error_count = 0  # error.execution events raised so far (traces report them)
         # The step bound (docs/semantics.md): bounded transitions taken since the count last
         # restarted, whether that count's error was raised, and the input that restarted it.
-        self._steps = 0
-        self._bound_hit = False
+        self._steps, self._bound_hit, self._bounded = 0, False, self._tables.bounded
         self._input: Event | None = None
-        self._bounded = any(t.bounded for n in self.chart.nodes.values() for t in n.transitions)
         # Invoked sessions (`sessions`): this engine's children, and where it sits when it is
         # one itself (the invoke ids from the member's session, its number and its parent's).
-        invokes = any(n.invokes for n in self.chart.nodes.values())
-        self.sessions: Sessions | None = Sessions(self) if invokes else None
+        self.sessions: Sessions | None = Sessions(self) if self._tables.invokes else None
         if self.sessions is None:  # a call less per event: `send` is `_step` itself
             self.send = self._step  # type: ignore[method-assign]
         self.path: tuple[str, ...] = ()
@@ -307,8 +303,12 @@ class Engine(Sends):
             self._restart_count(self.ctx.event)
         if selection.static is not None:
             return selection.static
+        chains = selection.chains
+        if len(chains) == 1:  # one atomic state reacts, along a chain without a fixed choice
+            chosen = self._first_enabled(chains[0][1])
+            return () if chosen is None else (chosen,)
         enabled: list[Transition] = []
-        for fixed, chain in selection.chains:
+        for fixed, chain in chains:
             chosen = fixed
             if chosen is None:
                 chosen = self._first_enabled(chain)
