@@ -194,7 +194,7 @@ class Step:
         simple = _simple_entry(transition)
         if simple is not None:
             scope, chain = simple
-            entries: tuple[Entry, ...] = tuple((state, None, None) for state in chain)
+            entries: tuple[Entry, ...] = tuple([(state, None, None) for state in chain])
             states = frozenset(chain)
         else:
             probe = _Reads({})  # records every history node looked up, whatever its value
@@ -292,17 +292,25 @@ class Step:
 
 def _simple_entry(transition: Transition) -> tuple[Node | None, tuple[Node, ...]] | None:
     """The domain and entry set (in entry order) of a transition without targets or with one
-    atomic target whose ancestors up to its domain include no parallel state: what `EntrySet`
-    finds, without its search (most transitions; None for the others)."""
+    atomic target whose ancestors up to its domain include no parallel state: what `domain`
+    and `EntrySet` find, without their search (most transitions; None for the others)."""
     targets = transition.targets
     if not targets:
         return None, ()
     target = targets[0]
     if len(targets) > 1 or not target.is_atomic:  # (a history node is not atomic)
         return None
-    scope = domain(transition, {})
+    source, above = transition.source, target.ancestors
+    scope: Node | None = None
+    if transition.internal and source.is_compound and source in above:
+        scope = source
+    else:  # `_lcca((source, target))`
+        for ancestor in source.ancestors:
+            if (ancestor.kind == "state" or ancestor.kind == "scxml") and ancestor in above:
+                scope = ancestor
+                break
     chain = [target]
-    for ancestor in target.ancestors:  # `EntrySet.add_ancestors`, which the parallel avoids
+    for ancestor in above:  # `EntrySet.add_ancestors`, which the parallel avoids
         if ancestor is scope or ancestor.kind == "scxml":
             break
         if ancestor.kind == "parallel":

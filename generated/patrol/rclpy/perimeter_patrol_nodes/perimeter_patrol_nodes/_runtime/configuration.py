@@ -185,6 +185,7 @@ class Tables:
         "alone",
         "alone_at",
         "below",
+        "bounded",
         "by_descriptor",
         "by_name",
         "configurations",
@@ -192,6 +193,7 @@ class Tables:
         "fillers",
         "histories",
         "inert_names",
+        "invokes",
         "known",
         "steps",
     )
@@ -209,7 +211,10 @@ class Tables:
         names: dict[str, None] = {}  # the names the chart itself gives, in document order
         self.histories: dict[Node, tuple[Node, ...]] = {}  # the states with history nodes
         above_parallel: set[Node] = set()  # the parallel states and their ancestors
+        self.bounded = False  # whether a transition counts for the step bound
+        self.invokes = False  # whether a state invokes sessions
         for node in nodes:
+            self.invokes = self.invokes or bool(node.invokes)
             if node.kind == "parallel":
                 above_parallel.update(node.lineage)
             if node.kind == "history" and node.parent is not None:
@@ -217,6 +222,7 @@ class Tables:
             if node.eventless:
                 self.eventless[node] = node.eventless
             for transition in node.transitions:
+                self.bounded = self.bounded or transition.bounded
                 for descriptor in transition.events:
                     self.by_descriptor.setdefault(descriptor, []).append(transition)
                     if "*" not in descriptor:
@@ -317,7 +323,10 @@ class Tables:
                 hits.setdefault(transition.source, []).append(transition)
         found = {}
         for node, some in hits.items():
-            matching = tuple(t for t in node.transitions if t in some and t.matches(name))
+            if len(some) == 1:  # most names: one transition of the node could match
+                matching: tuple[Transition, ...] = (some[0],) if some[0].matches(name) else ()
+            else:
+                matching = tuple(t for t in node.transitions if t in some and t.matches(name))
             if matching:
                 found[node] = matching
         return found
