@@ -1,10 +1,11 @@
 """The engine's dispatch tables: `Tables` interns each configuration it reaches, and a
 `Configuration` keeps, per event name, the transitions that could react (`Selection`) and, per
-set of enabled transitions, the whole microstep (`Plan`), computed once by the set functions of
-`microstep` (W3C SCXML 1.0, Appendix D). What a configuration seen for the first time costs is
+set of enabled transitions, the whole microstep (`Plan`, made in `plans` by the set functions of
+`microstep`, W3C SCXML 1.0, Appendix D). What a configuration seen for the first time costs is
 kept small: `Tables` indexes the chart's transitions by descriptor (what reacts to a name is a
-few look-ups), and a transition whose domain and entry set read no history has them computed
-once (`Step`), leaving the exit set.
+few look-ups), keeps what is the same in every configuration once (the selections of names one
+state reacts to, by that state; names nothing reacts to), and a transition whose domain and
+entry set read no history has them computed once (`Step`), leaving the exit set.
 """
 
 from __future__ import annotations
