@@ -19,6 +19,7 @@ RUNTIME_MODULES = (
     "chart",
     "host",
     "microstep",
+    "plans",
     "configuration",
     "engine",
     "sends",

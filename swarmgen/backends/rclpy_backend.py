@@ -64,8 +64,8 @@ from swarmgen.ros.interfaces import (
 __all__ = ["RclpyBackend", "field_type", "interfaces_package", "member_modules", "nodes_package"]
 
 RUNTIME_MODULES = (
-    "values", "chart", "host", "microstep", "configuration", "engine", "sends", "sessions",
-    "member", "replay", "args", "plugins",
+    "values", "chart", "host", "microstep", "plans", "configuration", "engine", "sends",
+    "sessions", "member", "replay", "args", "plugins",
 )  # fmt: skip
 ROS_RUNTIME_MODULES = (
     "spec",

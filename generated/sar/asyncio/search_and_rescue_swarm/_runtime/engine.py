@@ -56,8 +56,7 @@ class Engine(Sends):
         self.config: set[Node] = set()
         self.internal: deque[Event] = deque()
         self.history: dict[Node, tuple[Node, ...]] = {}
-        self.running = False
-        self.finished = False
+        self.running, self.finished = False, False
         self._to_invoke: set[Node] = set()
         self._activation: dict[Node, int] = {}
         self._ids = itertools.count(1)
@@ -66,6 +65,7 @@ class Engine(Sends):
         if self.chart.tables is None:
             self.chart.tables = Tables(self.chart.nodes.values())
         self._tables: Tables = self.chart.tables
+        self._inert = self._tables.inert_names  # names nothing reacts to, in any configuration
         # The value rule: a declared field the sender left out holds its default. Every declared
         # event's filler is made once per chart, so `send` finds it (or no filler) in one look-up.
         self._fillers = self._tables.fillers
@@ -78,14 +78,13 @@ class Engine(Sends):
         self.error_count = 0  # error.execution events raised so far (traces report them)
         # The step bound (docs/semantics.md): bounded transitions taken since the count last
         # restarted, whether that count's error was raised, and the input that restarted it.
-        self._steps = 0
-        self._bound_hit = False
+        self._steps, self._bound_hit, self._bounded = 0, False, self._tables.bounded
         self._input: Event | None = None
-        self._bounded = any(t.bounded for n in self.chart.nodes.values() for t in n.transitions)
         # Invoked sessions (`sessions`): this engine's children, and where it sits when it is
         # one itself (the invoke ids from the member's session, its number and its parent's).
-        invokes = any(n.invokes for n in self.chart.nodes.values())
-        self.sessions: Sessions | None = Sessions(self) if invokes else None
+        self.sessions: Sessions | None = Sessions(self) if self._tables.invokes else None
+        if self.sessions is None:  # a call less per event: `send` is `_step` itself
+            self.send = self._step  # type: ignore[method-assign]
         self.path: tuple[str, ...] = ()
         self.root_host: Host = self.host
         self.serial = 0
@@ -155,7 +154,7 @@ class Engine(Sends):
         if self.sessions is not None and not self.sessions.received(event):
             return  # from a session that was cancelled: discarded
         cfg = self._cfg or self._configuration()
-        selection = cfg.selections.get(name) or cfg.selection(name)
+        selection = cfg.selections.get(name) or self._inert.get(name) or cfg.selection(name)
         now: Configuration | None = cfg
         if selection.chains:
             static = selection.static  # `_choose`'s answer where it evaluates and counts nothing
@@ -240,32 +239,29 @@ class Engine(Sends):
     def _macrostep(self) -> None:
         """Microsteps until nothing is enabled, then the behaviours and invokes of the states
         entered start; an error that raised starts another round (W3C mainEventLoop)."""
+        internal, inert = self.internal, self._inert
         while True:
-            self._settle()
+            while self.running:  # the microsteps
+                cfg = self._cfg or self._configuration()
+                enabled = self._choose(cfg.eventless) if cfg.eventless.chains else ()
+                if not enabled:
+                    if not internal:
+                        break
+                    event = internal.popleft()
+                    self.ctx.event = event
+                    name = event.name
+                    selection = cfg.selections.get(name) or inert.get(name) or cfg.selection(name)
+                    if not selection.chains:
+                        continue
+                    static = selection.static
+                    enabled = self._choose(selection) if static is None or self._bounded else static
+                if enabled:
+                    self._microstep(enabled, cfg)
             if not self._to_invoke:
                 return
             self._start_calls()
-            if not self.internal or not self.running:
+            if not internal or not self.running:
                 return
-
-    def _settle(self) -> None:
-        internal = self.internal
-        while self.running:
-            cfg = self._cfg or self._configuration()
-            enabled = self._choose(cfg.eventless) if cfg.eventless.chains else ()
-            if not enabled:
-                if not internal:
-                    break
-                event = internal.popleft()
-                self.ctx.event = event
-                name = event.name
-                selection = cfg.selections.get(name) or cfg.selection(name)
-                if not selection.chains:
-                    continue
-                static = selection.static
-                enabled = self._choose(selection) if static is None or self._bounded else static
-            if enabled:
-                self._microstep(enabled, cfg)
 
     def _start_calls(self) -> None:
         invoke = self._to_invoke
@@ -308,8 +304,12 @@ class Engine(Sends):
             self._restart_count(self.ctx.event)
         if selection.static is not None:
             return selection.static
+        chains = selection.chains
+        if len(chains) == 1:  # one atomic state reacts, along a chain without a fixed choice
+            chosen = self._first_enabled(chains[0][1])
+            return () if chosen is None else (chosen,)
         enabled: list[Transition] = []
-        for fixed, chain in selection.chains:
+        for fixed, chain in chains:
             chosen = fixed
             if chosen is None:
                 chosen = self._first_enabled(chain)
