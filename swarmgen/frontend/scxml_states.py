@@ -45,12 +45,17 @@ class States:
     machines: dict[str, RawElement] = field(default_factory=dict)
     first_region: RawElement | None = None
     emitted: bool = False  # a document swarmgen wrote (the root has sg:machine)
-    # `<data expr>` computed at the start: assigned by the first initial transition made
+    # `<data expr>` computed at the start: assigned by the machine's own initial transition,
+    # the first one made in a region of the machine itself (nested regions' initials are made
+    # before their parents': those run after the states above them are entered)
     setup: list[etree._Element] = field(default_factory=list)
+    top_regions: set[int] = field(default_factory=set)  # ids of the machine's own regions
+    document_machine: RawElement | None = None  # the machine the document itself is
     invokes: Invokes | None = None  # reads each state's `<invoke>`s
 
     def machine(self, root: etree._Element, machine: RawElement) -> None:
         """The document's top level as the machine's region(s)."""
+        self.document_machine = machine
         kids = children(root, *_STATES)
         name = machine.name
         whole = [k for k in kids if not (local(k) == "final" and k.get("id") == "terminated")]
@@ -75,6 +80,8 @@ class States:
         """A region of `owner` with the vertices `kids` and its initial pseudostate."""
         region = self.b.make("region", "Region", owner, node, {"name": name})
         self.first_region = self.first_region or region
+        if owner is self.document_machine:
+            self.top_regions.add(id(region))
         initial = children(node, "initial")
         for kid in kids:
             self.vertex(kid, region)
@@ -117,7 +124,7 @@ class States:
             transient = self.vertices.get(targets[0])
             if transient is not None and transient.attrs.get("kind") == "initial":
                 return  # the root's transient `initial` state was read as the pseudostate
-        if self.setup:  # the machine's own initial transition, made first
+        if self.setup and id(region) in self.top_regions:  # the machine's own initial
             body, self.setup = [*self.setup, *body], []
         start = self.b.make("subvertex", "Pseudostate", region, node, {"name": "Initial"})
         if len(targets) > 1:
@@ -145,6 +152,8 @@ class States:
             self.region(owner, node, children(node, *_STATES), name, node.get("initial"))
         else:
             region = self.b.make("region", "Region", owner, node, {"name": name})
+            if owner is self.document_machine:
+                self.top_regions.add(id(region))
             self.vertex(node, region)
             self.initial_to(region, node, [str(node.get("id"))], [])
 
