@@ -36,8 +36,8 @@ def __create_fn__():
 FUNCTIONS['def __create_fn__():\n def __eq__(self,other):\n  if other.__class__ is self.__class__:\n   return (self.transition,self.targets,self.node,)==(other.transition,other.targets,other.node,)\n  return NotImplemented\n return __eq__'] = __create_fn__.__code__
 
 
-def __create_fn__(_type_b, _type_actions, _type_model, _type_vertices, _type_skipped, _type_pending, _type_machines, _type_first_region, _type_emitted, _type_setup, _type_invokes, MISSING, _HAS_DEFAULT_FACTORY, __dataclass_builtins_object__, _dflt_vertices, _dflt_skipped, _dflt_pending, _dflt_machines, _dflt_first_region, _dflt_emitted, _dflt_setup, _dflt_invokes, _return_type):
- def __init__(self,b:_type_b,actions:_type_actions,model:_type_model,vertices:_type_vertices=_HAS_DEFAULT_FACTORY,skipped:_type_skipped=_HAS_DEFAULT_FACTORY,pending:_type_pending=_HAS_DEFAULT_FACTORY,machines:_type_machines=_HAS_DEFAULT_FACTORY,first_region:_type_first_region=_dflt_first_region,emitted:_type_emitted=_dflt_emitted,setup:_type_setup=_HAS_DEFAULT_FACTORY,invokes:_type_invokes=_dflt_invokes)->_return_type:
+def __create_fn__(_type_b, _type_actions, _type_model, _type_vertices, _type_skipped, _type_pending, _type_machines, _type_first_region, _type_emitted, _type_setup, _type_top_regions, _type_document_machine, _type_invokes, MISSING, _HAS_DEFAULT_FACTORY, __dataclass_builtins_object__, _dflt_vertices, _dflt_skipped, _dflt_pending, _dflt_machines, _dflt_first_region, _dflt_emitted, _dflt_setup, _dflt_top_regions, _dflt_document_machine, _dflt_invokes, _return_type):
+ def __init__(self,b:_type_b,actions:_type_actions,model:_type_model,vertices:_type_vertices=_HAS_DEFAULT_FACTORY,skipped:_type_skipped=_HAS_DEFAULT_FACTORY,pending:_type_pending=_HAS_DEFAULT_FACTORY,machines:_type_machines=_HAS_DEFAULT_FACTORY,first_region:_type_first_region=_dflt_first_region,emitted:_type_emitted=_dflt_emitted,setup:_type_setup=_HAS_DEFAULT_FACTORY,top_regions:_type_top_regions=_HAS_DEFAULT_FACTORY,document_machine:_type_document_machine=_dflt_document_machine,invokes:_type_invokes=_dflt_invokes)->_return_type:
   self.b=b
   self.actions=actions
   self.model=model
@@ -48,28 +48,30 @@ def __create_fn__(_type_b, _type_actions, _type_model, _type_vertices, _type_ski
   self.first_region=first_region
   self.emitted=emitted
   self.setup=_dflt_setup() if setup is _HAS_DEFAULT_FACTORY else setup
+  self.top_regions=_dflt_top_regions() if top_regions is _HAS_DEFAULT_FACTORY else top_regions
+  self.document_machine=document_machine
   self.invokes=invokes
  return __init__
 
 
-FUNCTIONS['def __create_fn__(_type_b, _type_actions, _type_model, _type_vertices, _type_skipped, _type_pending, _type_machines, _type_first_region, _type_emitted, _type_setup, _type_invokes, MISSING, _HAS_DEFAULT_FACTORY, __dataclass_builtins_object__, _dflt_vertices, _dflt_skipped, _dflt_pending, _dflt_machines, _dflt_first_region, _dflt_emitted, _dflt_setup, _dflt_invokes, _return_type):\n def __init__(self,b:_type_b,actions:_type_actions,model:_type_model,vertices:_type_vertices=_HAS_DEFAULT_FACTORY,skipped:_type_skipped=_HAS_DEFAULT_FACTORY,pending:_type_pending=_HAS_DEFAULT_FACTORY,machines:_type_machines=_HAS_DEFAULT_FACTORY,first_region:_type_first_region=_dflt_first_region,emitted:_type_emitted=_dflt_emitted,setup:_type_setup=_HAS_DEFAULT_FACTORY,invokes:_type_invokes=_dflt_invokes)->_return_type:\n  self.b=b\n  self.actions=actions\n  self.model=model\n  self.vertices=_dflt_vertices() if vertices is _HAS_DEFAULT_FACTORY else vertices\n  self.skipped=_dflt_skipped() if skipped is _HAS_DEFAULT_FACTORY else skipped\n  self.pending=_dflt_pending() if pending is _HAS_DEFAULT_FACTORY else pending\n  self.machines=_dflt_machines() if machines is _HAS_DEFAULT_FACTORY else machines\n  self.first_region=first_region\n  self.emitted=emitted\n  self.setup=_dflt_setup() if setup is _HAS_DEFAULT_FACTORY else setup\n  self.invokes=invokes\n return __init__'] = __create_fn__.__code__
+FUNCTIONS['def __create_fn__(_type_b, _type_actions, _type_model, _type_vertices, _type_skipped, _type_pending, _type_machines, _type_first_region, _type_emitted, _type_setup, _type_top_regions, _type_document_machine, _type_invokes, MISSING, _HAS_DEFAULT_FACTORY, __dataclass_builtins_object__, _dflt_vertices, _dflt_skipped, _dflt_pending, _dflt_machines, _dflt_first_region, _dflt_emitted, _dflt_setup, _dflt_top_regions, _dflt_document_machine, _dflt_invokes, _return_type):\n def __init__(self,b:_type_b,actions:_type_actions,model:_type_model,vertices:_type_vertices=_HAS_DEFAULT_FACTORY,skipped:_type_skipped=_HAS_DEFAULT_FACTORY,pending:_type_pending=_HAS_DEFAULT_FACTORY,machines:_type_machines=_HAS_DEFAULT_FACTORY,first_region:_type_first_region=_dflt_first_region,emitted:_type_emitted=_dflt_emitted,setup:_type_setup=_HAS_DEFAULT_FACTORY,top_regions:_type_top_regions=_HAS_DEFAULT_FACTORY,document_machine:_type_document_machine=_dflt_document_machine,invokes:_type_invokes=_dflt_invokes)->_return_type:\n  self.b=b\n  self.actions=actions\n  self.model=model\n  self.vertices=_dflt_vertices() if vertices is _HAS_DEFAULT_FACTORY else vertices\n  self.skipped=_dflt_skipped() if skipped is _HAS_DEFAULT_FACTORY else skipped\n  self.pending=_dflt_pending() if pending is _HAS_DEFAULT_FACTORY else pending\n  self.machines=_dflt_machines() if machines is _HAS_DEFAULT_FACTORY else machines\n  self.first_region=first_region\n  self.emitted=emitted\n  self.setup=_dflt_setup() if setup is _HAS_DEFAULT_FACTORY else setup\n  self.top_regions=_dflt_top_regions() if top_regions is _HAS_DEFAULT_FACTORY else top_regions\n  self.document_machine=document_machine\n  self.invokes=invokes\n return __init__'] = __create_fn__.__code__
 
 
 def __create_fn__():
  def __repr__(self):
-  return self.__class__.__qualname__ + f"(b={self.b!r}, actions={self.actions!r}, model={self.model!r}, vertices={self.vertices!r}, skipped={self.skipped!r}, pending={self.pending!r}, machines={self.machines!r}, first_region={self.first_region!r}, emitted={self.emitted!r}, setup={self.setup!r}, invokes={self.invokes!r})"
+  return self.__class__.__qualname__ + f"(b={self.b!r}, actions={self.actions!r}, model={self.model!r}, vertices={self.vertices!r}, skipped={self.skipped!r}, pending={self.pending!r}, machines={self.machines!r}, first_region={self.first_region!r}, emitted={self.emitted!r}, setup={self.setup!r}, top_regions={self.top_regions!r}, document_machine={self.document_machine!r}, invokes={self.invokes!r})"
  return __repr__
 
 
-FUNCTIONS['def __create_fn__():\n def __repr__(self):\n  return self.__class__.__qualname__ + f"(b={self.b!r}, actions={self.actions!r}, model={self.model!r}, vertices={self.vertices!r}, skipped={self.skipped!r}, pending={self.pending!r}, machines={self.machines!r}, first_region={self.first_region!r}, emitted={self.emitted!r}, setup={self.setup!r}, invokes={self.invokes!r})"\n return __repr__'] = __create_fn__.__code__
+FUNCTIONS['def __create_fn__():\n def __repr__(self):\n  return self.__class__.__qualname__ + f"(b={self.b!r}, actions={self.actions!r}, model={self.model!r}, vertices={self.vertices!r}, skipped={self.skipped!r}, pending={self.pending!r}, machines={self.machines!r}, first_region={self.first_region!r}, emitted={self.emitted!r}, setup={self.setup!r}, top_regions={self.top_regions!r}, document_machine={self.document_machine!r}, invokes={self.invokes!r})"\n return __repr__'] = __create_fn__.__code__
 
 
 def __create_fn__():
  def __eq__(self,other):
   if other.__class__ is self.__class__:
-   return (self.b,self.actions,self.model,self.vertices,self.skipped,self.pending,self.machines,self.first_region,self.emitted,self.setup,self.invokes,)==(other.b,other.actions,other.model,other.vertices,other.skipped,other.pending,other.machines,other.first_region,other.emitted,other.setup,other.invokes,)
+   return (self.b,self.actions,self.model,self.vertices,self.skipped,self.pending,self.machines,self.first_region,self.emitted,self.setup,self.top_regions,self.document_machine,self.invokes,)==(other.b,other.actions,other.model,other.vertices,other.skipped,other.pending,other.machines,other.first_region,other.emitted,other.setup,other.top_regions,other.document_machine,other.invokes,)
   return NotImplemented
  return __eq__
 
 
-FUNCTIONS['def __create_fn__():\n def __eq__(self,other):\n  if other.__class__ is self.__class__:\n   return (self.b,self.actions,self.model,self.vertices,self.skipped,self.pending,self.machines,self.first_region,self.emitted,self.setup,self.invokes,)==(other.b,other.actions,other.model,other.vertices,other.skipped,other.pending,other.machines,other.first_region,other.emitted,other.setup,other.invokes,)\n  return NotImplemented\n return __eq__'] = __create_fn__.__code__
+FUNCTIONS['def __create_fn__():\n def __eq__(self,other):\n  if other.__class__ is self.__class__:\n   return (self.b,self.actions,self.model,self.vertices,self.skipped,self.pending,self.machines,self.first_region,self.emitted,self.setup,self.top_regions,self.document_machine,self.invokes,)==(other.b,other.actions,other.model,other.vertices,other.skipped,other.pending,other.machines,other.first_region,other.emitted,other.setup,other.top_regions,other.document_machine,other.invokes,)\n  return NotImplemented\n return __eq__'] = __create_fn__.__code__
