@@ -3,7 +3,9 @@ model text made safe for a generated Markdown table and for XML character data."
 
 from __future__ import annotations
 
-from typing import Literal
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import Any, Literal
 
 from swarmgen import __version__
 from swarmgen.names import one_line
@@ -38,3 +40,24 @@ def xml_text(text: str) -> str:
     """`text` as XML character data: `&`, `<` and `>` escaped, as `xml.sax.saxutils.escape`
     does (importing that module pulls in urllib.request, http and ssl: ~10 ms of compile)."""
     return text.replace("&", "&amp;").replace(">", "&gt;").replace("<", "&lt;")
+
+
+def write_modules(
+    directory: Path, doc: str, modules: Mapping[str, str], log: Callable[[str], Any], what: str
+) -> list[Path]:
+    """Write a package of modules that a build step generated (`make templates`, `make
+    records`): `__init__.py` holding `doc`, then each module by name, removing the modules of
+    an earlier build that are no longer made; returns the files written (`__init__.py` first)."""
+    directory.mkdir(exist_ok=True)
+    init = directory / "__init__.py"
+    init.write_text(f'"""{doc}"""\n', encoding="utf-8")
+    written = [init]
+    for name, text in modules.items():
+        target = directory / f"{name}.py"
+        target.write_text(text, encoding="utf-8")
+        written.append(target)
+    for stale in set(directory.glob("*.py")) - set(written):
+        stale.unlink()
+        log(f"removed {stale.name}")
+    log(f"{len(written) - 1} {what} in {directory}")
+    return written

@@ -100,20 +100,14 @@ def build(
 ) -> list[Path]:
     """Write the module of every template `environment` lists into `directory` (and remove
     modules of templates that are gone); returns the modules written."""
-    directory.mkdir(exist_ok=True)
-    init = directory / "__init__.py"
-    init.write_text('"""Compiled templates: see swarmgen/precompiled.py."""\n', encoding="utf-8")
-    written = [init]
+    from swarmgen.generated import write_modules
+
+    modules = {}
     for template in environment.list_templates(extensions=["j2"]):
         source, _, _ = environment.loader.get_source(environment, template)  # type: ignore[union-attr]
-        target = directory / f"{module_name(template)}.py"
-        target.write_text(module_text(environment, template, source), encoding="utf-8")
-        written.append(target)
-    for stale in set(directory.glob("*.py")) - set(written):
-        stale.unlink()
-        log(f"removed {stale.name}")
-    log(f"{len(written) - 1} template module(s) in {directory}")
-    return written
+        modules[module_name(template)] = module_text(environment, template, source)
+    doc = "Compiled templates: see swarmgen/precompiled.py."
+    return write_modules(directory, doc, modules, log, "template module(s)")
 
 
 def main() -> int:

@@ -213,26 +213,19 @@ def build(directory: Path = DIRECTORY, log: Callable[[str], Any] = print) -> lis
         recorded = _recorded
     finally:
         _recorded = None
-    directory.mkdir(exist_ok=True)
-    init = directory / "__init__.py"
-    init.write_text(
-        '"""Compiled dataclass methods: see swarmgen/records.py."""\n', encoding="utf-8"
-    )
-    written = [init]
+    from swarmgen.generated import write_modules
+
+    modules: dict[str, str] = {}
     for module in sorted(recorded):
         if not covered(module):
             continue  # a dataclass of another package made while ours were recorded
         texts = list(dict.fromkeys(recorded[module]))  # in order, each once
-        target = directory / f"{record_module(module).rsplit('.', 1)[1]}.py"
-        if target in written:  # `a.b__c` and `a__b.c` would share one: rename a module
-            raise RuntimeError(f"two modules map to {target.name}")
-        target.write_text(module_text(module, texts), encoding="utf-8")
-        written.append(target)
-    for stale in set(directory.glob("*.py")) - set(written):
-        stale.unlink()
-        log(f"removed {stale.name}")
-    log(f"{len(written) - 1} module(s) of dataclass methods in {directory}")
-    return written
+        name = record_module(module).rsplit(".", 1)[1]
+        if name in modules:  # `a.b__c` and `a__b.c` would share one: rename a module
+            raise RuntimeError(f"two modules map to {name}.py")
+        modules[name] = module_text(module, texts)
+    doc = "Compiled dataclass methods: see swarmgen/records.py."
+    return write_modules(directory, doc, modules, log, "module(s) of dataclass methods")
 
 
 def main(argv: list[str] | None = None) -> int:
