@@ -59,7 +59,9 @@ class Transitions(Context):
             guard = expr.replace_fields(guard, outputs)
         return c.Transition(
             events=events,
-            targets=() if internal_self else tuple(self._targets(copy, transition.target)),
+            targets=()
+            if internal_self
+            else (*self._targets(copy, transition.target), *self._reentered(copy, transition)),
             cond=cond(guard),
             internal=transition.kind == "local",
             actions=self._actions(transition.effect, transition.opaque, outputs),
@@ -155,6 +157,18 @@ class Transitions(Context):
             if all(candidate in ch for ch in chains[1:]):
                 return candidate
         return None
+
+    def _reentered(self, copy: Copy, transition: Transition) -> tuple[str, ...]:
+        """The state the transition exits and enters again as a whole, as a further target
+        after its own: what SCXML's `target="a1 p"` means, with `p` a parallel holding `a1`
+        (its other regions entered by default, `a1`'s by the first target)."""
+        state = transition.reenters
+        if state is None:
+            return ()
+        if state == copy.machine.id:  # the machine's own regions: the root's parallel node
+            key = (copy.instance, f"{state}#parallel")
+            return (self.vertex_ids[key],) if key in self.vertex_ids else ()
+        return (self._id(copy.instance, state),)
 
     def _targets(self, copy: Copy, vertex_id: str) -> list[str]:
         placed = copy.placed.get(vertex_id)

@@ -115,7 +115,22 @@ def check_wellformed(model: Model) -> list[Diagnostic]:
             elif isinstance(vertex, Pseudostate):
                 found += _pseudostate_rules(m, placed, vertex)
         found += _region_names(machine.name, machine.regions)
+        found += [
+            dg.BAD_TARGET.at(t.span, "reenters", name=t.name, state=m.name(t.reenters))
+            for t in machine.transitions
+            if t.reenters is not None and not _holds_both(m, t, t.reenters)
+        ]
     return found
+
+
+def _holds_both(m: _Machine, transition: Transition, state: str) -> bool:
+    """Whether `state` (a state, or the machine) holds the transition's source and target."""
+    if state == m.machine.id:
+        return True
+    return all(
+        any(level[0] == state for level in m.path(end))
+        for end in (transition.source, transition.target)
+    )
 
 
 def _pseudostate_rules(m: _Machine, placed: Placed, vertex: Pseudostate) -> list[Diagnostic]:

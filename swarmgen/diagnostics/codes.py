@@ -216,7 +216,12 @@ BAD_TARGET = register(
     "a transition source or target is not a vertex",
     message="transition '{name}' lacks a source or a target",
     variants={
-        "not-a-state": M("transition {end} '{name}' is a {kind}, not a state of this machine")
+        "not-a-state": M("transition {end} '{name}' is a {kind}, not a state of this machine"),
+        "reenters": M(
+            "transition '{name}' re-enters '{state}', which does not hold both its ends",
+            hint="`reenters` names a state that holds the source and the target (or the "
+            "machine); the SCXML reader sets it",
+        ),
     },
 )
 SUBMACHINE_CYCLE = register(

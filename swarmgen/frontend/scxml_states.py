@@ -16,8 +16,9 @@ from lxml import etree
 from swarmgen import diagnostics as dg
 from swarmgen.frontend.raw import RawElement
 from swarmgen.frontend.scxml_actions import Actions
+from swarmgen.frontend.scxml_domain import is_own_region, reentered, split_reentry
 from swarmgen.frontend.scxml_invoke import Invokes
-from swarmgen.frontend.scxml_raw import Builder, children, local, sg
+from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, local, sg
 from swarmgen.records import dataclass
 
 _STATES = ("state", "parallel", "final", "history")
@@ -52,10 +53,14 @@ class States:
     top_regions: set[int] = field(default_factory=set)  # ids of the machine's own regions
     document_machine: RawElement | None = None  # the machine the document itself is
     invokes: Invokes | None = None  # reads each state's `<invoke>`s
+    by_id: dict[str, etree._Element] = field(default_factory=dict)  # the document's states
 
     def machine(self, root: etree._Element, machine: RawElement) -> None:
         """The document's top level as the machine's region(s)."""
         self.document_machine = machine
+        for node in root.iter(tag=etree.Element):
+            if node.get("id") and in_scxml(node) and local(node) in _STATES:
+                self.by_id.setdefault(str(node.get("id")), node)
         kids = children(root, *_STATES)
         name = machine.name
         whole = [k for k in kids if not (local(k) == "final" and k.get("id") == "terminated")]
@@ -142,11 +147,8 @@ class States:
         has behaviour of its own (W3C parallel children are states)."""
         # a <parallel> child is never its region: its own children are regions, not states
         # one after another (W3C 3.4)
-        plain = local(node) == "state" and not (
-            children(node, "onentry", "onexit", "transition", "invoke")
-        )
         name = sg(node, "region") or str(node.get("id") or "Region")
-        if sg(node, "region") is not None or (plain and children(node, *_STATES)):
+        if is_own_region(node):
             if node.get("id"):
                 self.vertices[str(node.get("id"))] = owner
             self.region(owner, node, children(node, *_STATES), name, node.get("initial"))
@@ -327,7 +329,7 @@ class States:
         triggers = self.actions.triggers(node, events, ident, call)
         if triggers is None:
             return
-        targets = str(node.get("target", "")).split()
+        targets, extra = split_reentry(str(node.get("target", "")).split(), self.by_id)
         join = sg(node, "join")
         transition = self.transition(
             region,
@@ -343,6 +345,8 @@ class States:
             transition.attrs["kind"] = "local" if targets else "internal"
         if transition is not None and not targets:
             transition.attrs["kind"] = "internal"
+        if transition is not None and targets and transition.attrs["source"] == str(vertex.id):
+            self.reentry(transition, node, targets[0], extra)  # (not from a join: UML's own)
         if transition is not None and not events and (call or _compound(node.getparent())):
             # SCXML takes it as soon as its cond holds; without the mark, UML would read a
             # composite's (or a behaviour's) untriggered transition as its completion
@@ -393,6 +397,22 @@ class States:
         self.actions.effect(transition, node, body or [])
         return transition
 
+    def reentry(
+        self,
+        transition: RawElement,
+        node: etree._Element,
+        target: str,
+        extra: list[etree._Element],
+    ) -> None:
+        """Mark a transition that W3C lets leave a whole `<parallel>` where the reader's regions
+        would keep it inside one child (`scxml_domain.reentered`)."""
+        source, end = node.getparent(), self.by_id.get(target)
+        if source is None or end is None:
+            return  # an unknown target is reported when it is resolved
+        state = reentered(source, end, extra, internal=node.get("type") == "internal")
+        if state is not None and state.get("id"):
+            self.pending.append(_Pending(transition, [f"reenters:{state.get('id')}"], node))
+
     def join(
         self,
         region: RawElement,
@@ -415,8 +435,9 @@ class States:
         for item in self.pending:
             target = item.targets[0]
             feature = "target"
-            if target.startswith("source:"):
-                feature, target = "source", target[len("source:") :]
+            for prefix in ("source", "reenters"):
+                if target.startswith(f"{prefix}:"):
+                    feature, target = prefix, target[len(prefix) + 1 :]
             found = self.vertices.get(target)
             if found is None:
                 why = "unknown-target"

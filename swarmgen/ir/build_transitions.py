@@ -76,8 +76,27 @@ def read_transition(b: Builder, element: RawElement, ctx: MachineContext) -> Tra
         opaque=tuple(opaque),
         kind=_transition_kind(b, element),
         eventless=element.attrs.get("eventless") == "true",
+        reenters=_reenters(b, element, ctx),
         span=element.span,
     )
+
+
+def _reenters(b: Builder, element: RawElement, ctx: MachineContext) -> str | None:
+    """The state the transition exits and enters again as a whole (`Transition.reenters`)."""
+    if not element.ref_values("reenters"):
+        return None
+    found = b.ref(element, "reenters")
+    if found is None:
+        return None  # reported by `ref`
+    if found.id not in ctx.vertices and found.uml_type != "StateMachine":
+        kind = found.uml_type or found.feature
+        b.diags.append(
+            dg.BAD_TARGET.at(
+                element.span, "not-a-state", end="reenters", name=found.name, kind=kind
+            )
+        )
+        return None
+    return found.id
 
 
 _TRANSITION_KINDS: dict[str, Literal["external", "internal", "local"]] = {

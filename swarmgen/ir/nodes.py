@@ -347,6 +347,11 @@ class Transition(Node):
     # soon as its guard holds, not at the completion UML gives an untriggered one (only the
     # SCXML reader sets it; XMI spells it `eventless="true"`, docs/scxml-input.md)
     eventless: bool = False
+    # the state (or the machine, for its own parallel regions) the transition exits and enters
+    # again as a whole: W3C's domain of an SCXML transition out of a `<parallel>` child's own
+    # state, which UML's regions would keep inside the child (only the SCXML reader sets it; XMI
+    # spells it `reenters="<id>"`, docs/scxml-input.md)
+    reenters: str | None = None
     span: Span
 
 
