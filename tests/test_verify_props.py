@@ -90,6 +90,26 @@ def test_the_same_property_holds_when_the_preemption_is_retried(tmp_path: Path) 
     assert "Hovering" in result.findings[0].diagnostic.message
 
 
+def test_a_leads_to_whose_premise_never_holds_is_vacuous(tmp_path: Path) -> None:
+    """With one UAV, `count(UAV in Up) > 1` never holds: `... leads to UAV in Done` then holds
+    for no reason, and says so (SG409, a warning on the property) instead of a silent
+    `verified`; a premise that does hold (`launch`) gives no warning. The verdict stays 0."""
+    texts = ("count(UAV in Up) > 1 leads to UAV in Done", "launch leads to UAV in Up")
+    kit = flight("Vacuous", preempted="Hovering", properties=texts)
+    result = run.verify(write(kit, tmp_path, "vacuous"), Budget())
+    assert result.exit_code == run.VERIFIED
+    assert codes(result) == ["SG409"]
+    (vacuous,) = [f.diagnostic for f in result.findings]
+    assert result.search is not None
+    assert vacuous.message == (
+        "property 'p1' holds vacuously: count(UAV in Up) > 1 leads to UAV in Done ('count(UAV "
+        f"in Up) > 1' never holds before the abort in the {result.search.states:,} states "
+        "explored)"
+    )
+    assert vacuous.span.line > 0  # located on the model's constraint
+    assert result.findings[0].trace is None
+
+
 def test_a_lost_event_under_one_interleaving_only(tmp_path: Path) -> None:
     """The UGV sends `go` as soon as it is launched; the UAV takes it only once its take-off
     succeeded. If the UGV is first, `go` reaches the UAV taking off and is lost (SG406), and

@@ -80,6 +80,17 @@ VERIFY_PROPERTY = register(
     message="property '{name}' is violated: {text} ({how}; shortest trace: {length} step(s))",
     hint="the trace below leads to it{fairness}",
 )
+VERIFY_VACUOUS = register(
+    "SG409",
+    "property-vacuous",
+    "a `P leads to Q` property that holds only because P never holds before the abort in the "
+    "whole explored space: it says nothing (a warning)",
+    WARNING,
+    message="property '{name}' holds vacuously: {text} ('{premise}' never holds before the "
+    "abort in the {states:,} states explored)",
+    hint="the premise names an event nobody sends or a state never entered with the rest of it: "
+    "state what can happen (`eventually ...` shows whether it does)",
+)
 VERIFY_PROPERTY_INVALID = register(
     "SG408",
     "property-invalid",

@@ -46,6 +46,23 @@ def check(observer: Observer, prop: Property) -> Lasso | None:
     return _Product(observer, prop).violation()
 
 
+def premise_seen(observer: Observer, prop: Property) -> bool:
+    """Whether the left side of `P leads to Q` holds at some position of the explored graph
+    before the abort, where it starts an obligation (else the property holds vacuously). The
+    reductions keep this: symmetry and the partial-order reduction's visibility keep every
+    position's atoms, so P holds somewhere in the reduced graph iff it does in the whole one."""
+    left, graph, bits, holds = prop.left, observer.graph, observer.bits, observer.holds
+    assert left is not None
+    if 0 not in graph.aborted and holds(left, (bits[0], frozenset())):
+        return True
+    for state in bits:
+        for edge in graph.edges(state):
+            target = graph.target[edge]
+            if target not in graph.aborted and holds(left, (bits[target], graph.events[edge])):
+                return True
+    return False
+
+
 class _Product:
     """Nodes are `2 * state + pending`; only pending nodes can violate."""
 

@@ -3,6 +3,7 @@ verdicts to findings (SG407) with counterexamples (docs/verify.md, "User propert
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 
 from swarmgen import diagnostics as dg
@@ -65,6 +66,7 @@ def evaluate(system: System, search: Search, observer: Observer, budget: Budget)
                 continue
             lasso = liveness.check(observer, prop.tree)
             if lasso is None:
+                found.extend(_vacuous(prop, observer, search))
                 continue
             trace = rerun(system, lasso.stem + lasso.cycle, budget.symmetry)
             trace.loop = len(lasso.stem) if lasso.cycle else None
@@ -83,3 +85,15 @@ def evaluate(system: System, search: Search, observer: Observer, budget: Budget)
         )  # fmt: skip
         found.append(Finding(diagnostic, trace))
     return found
+
+
+def _vacuous(prop: Checked, observer: Observer, search: Search) -> list[Finding]:
+    """SG409 for a `P leads to Q` that holds because P never does."""
+    tree = prop.tree
+    if tree.kind != "leads to" or tree.left is None or liveness.premise_seen(observer, tree):
+        return []
+    premise = re.split(r"\bleads\s+to\b", prop.text, maxsplit=1)[0].strip()
+    diagnostic = cv.VERIFY_VACUOUS.at(
+        prop.span, name=prop.name, text=prop.text, premise=premise, states=search.states
+    )
+    return [Finding(diagnostic)]
