@@ -8,10 +8,10 @@ whole-process time of each are its own: `swarmgen verify MODEL --members UAV=a,U
 [--no-symmetry] [--no-por] --max-states N`, the sample's own property included. A configuration
 that does not finish within its budget of states is recorded as bounded with how far it got.
 
-    .venv/bin/python benchmarks/bench_verify.py [--max-states 1500000] [--quick]
+    .venv/bin/python benchmarks/bench_verify.py [--max-states 1500000] [--quick] [--upto N] [-o F]
 
-Writes benchmarks/results/verify.json (`--quick` leaves out the runs bounded by the budget and
-writes nothing). The machine is shared: the load average is recorded.
+Writes benchmarks/results/verify.json, or F (`--quick` leaves out the runs bounded by the budget
+and writes nothing; `--upto N` runs only the SAR compositions of at most N members). The machine is shared: the load average is recorded.
 """
 
 from __future__ import annotations
@@ -140,6 +140,12 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true", help="leave out the bounded runs")
     parser.add_argument("--one", nargs=6, metavar=("MODEL", "UAVS", "UGVS", "SYM", "POR", "N"))
     parser.add_argument(
+        "--upto",
+        type=int,
+        help="only the SAR compositions of at most this many members in all (no take-off runs)",
+    )
+    parser.add_argument("-o", "--output", type=Path, default=RESULTS)
+    parser.add_argument(
         "--baseline",
         type=Path,
         help="a checkout of the code before a change: run SPEED_CONFIGS with it and with this "
@@ -160,6 +166,8 @@ def main() -> None:
         for name, uavs, ugvs, sym, por, bounded in CONFIGS:
             if bounded and args.quick:
                 continue
+            if args.upto is not None and (name != "sar" or uavs + ugvs > args.upto):
+                continue
             command = [sys.executable, __file__, "--one", str(models[name]), str(uavs)]
             budget = max(args.max_states, BUDGETS.get((name, uavs, ugvs, sym, por), 0))
             command += [str(ugvs), str(int(sym)), str(int(por)), str(budget)]
@@ -172,13 +180,13 @@ def main() -> None:
     if args.quick:
         return
     payload = {
-        "command": "benchmarks/bench_verify.py --max-states " + str(args.max_states),
+        "command": " ".join(["benchmarks/bench_verify.py", *sys.argv[1:]]),
         "python": platform.python_version(),
         "cpus": os.cpu_count(),
         "load_average": os.getloadavg(),
         "results": rows,
     }
-    RESULTS.write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
+    args.output.write_text(json.dumps(payload, indent=2) + "\n", encoding="utf-8")
 
 
 if __name__ == "__main__":

@@ -420,4 +420,4 @@ def test_sar_with_two_uavs_and_two_ugvs_verifies_its_property(tmp_path: Path) ->
     assert result.exit_code == run.VERIFIED
     assert codes(result) == ["SG406", "SG406"]  # warnings: 'targetFound' and 'targetRescued'
     assert result.search is not None and not result.search.bounded
-    assert result.search.states == 185_752  # with every reduction (docs/verify.md, the table)
+    assert result.search.states == 81_810  # with every reduction (docs/verify.md, the table)

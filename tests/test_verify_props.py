@@ -174,6 +174,68 @@ def test_the_reductions_keep_the_verdicts(tmp_path: Path, por: bool, symmetry: b
     assert (result.exit_code, codes(result)) == (run.VIOLATED, ["SG403"])  # Hovering only
 
 
+STATE_PROPERTIES = (
+    "never (UGV in MoveToTarget and UAV in Coverage)",
+    "always count(UGV in Rescuing) <= 0",
+    "UGV in Bidding leads to UGV in Ready",
+    "UAV in SelectRover leads to UGV in MoveToTarget",
+    "always UGV.target_id == 0",
+)
+
+
+@pytest.mark.parametrize("text", STATE_PROPERTIES)
+def test_a_property_sees_its_own_states_through_the_reduction(text: str) -> None:
+    """The partial-order reduction hides a member's step only when the property cannot see it:
+    its visibility is the states the atoms name and the data they read, per member type (a
+    rover going from Ready to Bidding is invisible to `UGV in MoveToTarget`). On SAR the verdict
+    and the findings are those of the whole graph, property by property (an agreement check:
+    the case an unsound visibility gets wrong is the next test's)."""
+    outcomes = []
+    for por in (True, False):
+        result = run.verify(SAR, Budget(por=por), {"UAV": 1, "UGV": 1}, properties=(text,))
+        assert result.search is not None and not result.search.bounded
+        outcomes.append((result.exit_code, codes(result)))
+    assert outcomes[0] == outcomes[1]
+
+
+def test_a_transient_state_the_property_names_is_never_skipped(tmp_path: Path) -> None:
+    """A passes through X (`launch` in, `start` out) while B goes to Y on `start`: the property
+    is broken only when B takes `start` before A does. Each delivery sends nothing, so without
+    visibility the reduction would take A's two deliveries as one chain and never see A in X
+    with B in Y (measured: a projection that sees nothing misses the SG407). A's delivery into
+    or out of X is visible, B's into Y too: both orders are kept; A's other steps are not."""
+    kit = ModelKit("Transient")
+    kit.event("launch", sender="station")
+    kit.event("start", sender="station")
+    a = kit.machine("AMachine")
+    a.initial("Idle")
+    for state in ("Idle", "X", "Z"):
+        a.state(state)
+    a.transition("Idle", "X", "launch")
+    a.transition("X", "Z", "start")
+    b = kit.machine("BMachine")
+    b.initial("Wait")
+    for state in ("Wait", "Ready", "Y"):
+        b.state(state)
+    b.transition("Wait", "Ready", "launch")
+    b.transition("Ready", "Y", "start")
+    kit.member("A", machine=a)
+    kit.member("B", machine=b)
+    kit.swarm("Swarm", {"A": 1, "B": 1})
+    kit.property("Swarm", "p1", "never (A in X and B in Y)")
+    model = write(kit, tmp_path, "transient")
+    states = {}
+    for por in (True, False):
+        result = run.verify(model, Budget(por=por))
+        assert codes(result) == ["SG401", "SG407"]  # no final state: it stops (SG401)
+        assert result.search is not None
+        states[por] = result.search.states
+        trace = finding(result, "SG407")
+        assert result.loaded.system is not None
+        replays_to_the_same_configuration(model, result.loaded.system, trace)
+    assert states[True] < states[False]
+
+
 def test_partial_order_reduction_explores_fewer_states() -> None:
     counts = {}
     for por in (True, False):

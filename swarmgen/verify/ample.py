@@ -11,8 +11,9 @@ the head is the member's next input whatever else happens first, and taking it i
 - taking it sends nothing (to others: their inboxes' order would depend on it; to itself);
 - it cancels no timer or delayed raise of the member and no behaviour that may still emit (a
   timer that fired first would stay queued, an emission made first would stay sent);
-- it changes nothing a user property observes of the member (*visibility*: its active states
-  and the data the properties read, `Observer.projection`).
+- it changes nothing a user property observes of the member (*visibility*: whether it is in
+  each state the properties' atoms name for its type, and the data they read,
+  `Observer.projection`; a step between two states no atom names is invisible).
 
 Then `{deliver}` is a **persistent set**: a step of another member only reads and writes that
 member and appends behind the head; a behaviour end, timer or delayed raise of the member

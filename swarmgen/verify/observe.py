@@ -92,7 +92,17 @@ class Observer:
         self._facts: dict[int, tuple[frozenset[str], dict[str, Any]]] = {}
         self._step_ids: dict[Step, int] = {}
         self._sets: dict[frozenset[int], int] = {}
-        self._watched = {a.member for a in self.atoms if not isinstance(a, Occurs | Bool)}
+        # per member type, the state names and data its atoms read: all a step may change
+        # without the properties seeing it is the rest (`projection`)
+        self._watched: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {}
+        for atom in self.atoms:
+            if isinstance(atom, InState | Count | Datum):
+                states, data = self._watched.get(atom.member, (frozenset(), ()))
+                if isinstance(atom, Datum):
+                    data = tuple(sorted({*data, atom.datum}))
+                else:
+                    states = states | {atom.state}
+                self._watched[atom.member] = (states, data)
         self._value_labels: dict[int, frozenset[int]] = {}  # member value -> its steps' labels
         self._safety_props = sum(p.tree.kind in ("always", "never") for p in self.props)
 
@@ -104,10 +114,12 @@ class Observer:
         if not self.atoms:
             return None
         kind = self.system.kinds[self.system.value_type[value]].name
-        if kind not in self._watched:
+        watched = self._watched.get(kind)
+        if watched is None:
             return None
+        states, read = watched
         names, data = self.facts(value)
-        return names, tuple(sorted(data.items(), key=lambda kv: kv[0]))
+        return names & states, tuple(data.get(name) for name in read)
 
     def discovered(self, number: int, state: SwarmState) -> None:
         """A new state: its atoms."""
