@@ -38,39 +38,21 @@ def _doc(name: str, a_region: str, initial: str = "p") -> str:
 """
 
 
-A_TO_CHILD = """
+def _a(own: str = "", a2: str = "") -> str:
+    """The `<parallel>`'s child `a`, with a transition of its own and one of `a2`'s."""
+    return f"""
     <state id="a">
-      <onexit><assign location="ax" expr="ax + 1"/></onexit>
-      <transition event="reset" target="a1"/>
+      <onexit><assign location="ax" expr="ax + 1"/></onexit>{own}
       <state id="a1"><transition event="go" target="a2"/></state>
-      <state id="a2"/>
+      <state id="a2">{a2}</state>
     </state>"""
-A_TO_ITSELF = """
-    <state id="a">
-      <onexit><assign location="ax" expr="ax + 1"/></onexit>
-      <state id="a1"><transition event="go" target="a2"/></state>
-      <state id="a2"><transition event="reset" target="a"/></state>
-    </state>"""
-A_SELF = """
-    <state id="a">
-      <onexit><assign location="ax" expr="ax + 1"/></onexit>
-      <transition event="reset" target="a"/>
-      <state id="a1"><transition event="go" target="a2"/></state>
-      <state id="a2"/>
-    </state>"""
-A_INTERNAL = """
-    <state id="a">
-      <onexit><assign location="ax" expr="ax + 1"/></onexit>
-      <transition event="reset" type="internal" target="a1"/>
-      <state id="a1"><transition event="go" target="a2"/></state>
-      <state id="a2"/>
-    </state>"""
-A_INSIDE = """
-    <state id="a">
-      <onexit><assign location="ax" expr="ax + 1"/></onexit>
-      <state id="a1"><transition event="go" target="a2"/></state>
-      <state id="a2"><transition event="reset" target="a1"/></state>
-    </state>"""
+
+
+A_TO_CHILD = _a(own='<transition event="reset" target="a1"/>')
+A_TO_ITSELF = _a(a2='<transition event="reset" target="a"/>')
+A_SELF = _a(own='<transition event="reset" target="a"/>')
+A_INTERNAL = _a(own='<transition event="reset" type="internal" target="a1"/>')
+A_INSIDE = _a(a2='<transition event="reset" target="a1"/>')
 
 STEPS = [{"event": "go"}, {"event": "reset"}, {"event": "go"}]
 START = {"ax": 0, "bx": 0, "bn": 1}
@@ -95,12 +77,20 @@ def _counters(trace: list[dict[str, object]]) -> list[dict[str, object]]:
     return found
 
 
+def _run(tmp_path: Path, name: str, text: str, backend: str) -> list[dict[str, object]]:
+    """The counters after each of STEPS: in Qt (the document as written) or a backend."""
+    document = tmp_path / f"{name}.scxml"
+    document.write_text(text, encoding="utf-8")
+    if backend == "qt":
+        return _counters(replay.run_qt(document, STEPS))
+    (trace,) = replay.replay_many(document, name, [STEPS], backend)
+    return _counters(trace)
+
+
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_qt_runs_the_document_as_w3c_says(case: str, tmp_path: Path, qt_available: None) -> None:
     region, expected = CASES[case]
-    document = tmp_path / "Par.scxml"
-    document.write_text(_doc("Par", region), encoding="utf-8")
-    assert _counters(replay.run_qt(document, STEPS)) == expected
+    assert _run(tmp_path, "Par", _doc("Par", region), "qt") == expected
 
 
 @pytest.mark.parametrize("backend", ["asyncio", "smach", "scxml"])
@@ -109,10 +99,7 @@ def test_every_backend_leaves_what_w3c_leaves(
     case: str, backend: str, tmp_path: Path, qt_available: None
 ) -> None:
     region, expected = CASES[case]
-    document = tmp_path / "Par.scxml"
-    document.write_text(_doc("Par", region), encoding="utf-8")
-    (trace,) = replay.replay_many(document, "Par", [STEPS], backend)
-    assert _counters(trace) == expected
+    assert _run(tmp_path, "Par", _doc("Par", region), backend) == expected
 
 
 NESTED = f"""{HEAD} initial="top" name="Nest">
@@ -136,13 +123,7 @@ NESTED = f"""{HEAD} initial="top" name="Nest">
 def test_nested_parallels_are_all_left(backend: str, tmp_path: Path, qt_available: None) -> None:
     """`a` is a child of `p`, itself a child of `top`: W3C's domain is the root, so `b` (a
     child of `top`) is left too; the reader re-enters `top`, the outermost `<parallel>`."""
-    document = tmp_path / "Nest.scxml"
-    document.write_text(NESTED, encoding="utf-8")
-    if backend == "qt":
-        trace = replay.run_qt(document, STEPS)
-    else:
-        (trace,) = replay.replay_many(document, "Nest", [STEPS], backend)
-    assert _counters(trace) == WHOLE
+    assert _run(tmp_path, "Nest", NESTED, backend) == WHOLE
 
 
 TOP = f"""{HEAD} initial="Top" name="Top">
@@ -159,13 +140,7 @@ def test_the_machines_own_parallel_is_left(
 ) -> None:
     """A top `<parallel>` named after the document is the machine's own regions (docs/scxml.md):
     the transition re-enters the machine's parallel node."""
-    document = tmp_path / "Top.scxml"
-    document.write_text(TOP, encoding="utf-8")
-    if backend == "qt":
-        trace = replay.run_qt(document, STEPS)
-    else:
-        (trace,) = replay.replay_many(document, "Top", [STEPS], backend)
-    assert _counters(trace) == WHOLE
+    assert _run(tmp_path, "Top", TOP, backend) == WHOLE
 
 
 def test_the_emitted_document_says_it_and_reads_back_alike(tmp_path: Path) -> None:

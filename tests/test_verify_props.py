@@ -207,20 +207,14 @@ def test_a_transient_state_the_property_names_is_never_skipped(tmp_path: Path) -
     kit = ModelKit("Transient")
     kit.event("launch", sender="station")
     kit.event("start", sender="station")
-    a = kit.machine("AMachine")
-    a.initial("Idle")
-    for state in ("Idle", "X", "Z"):
-        a.state(state)
-    a.transition("Idle", "X", "launch")
-    a.transition("X", "Z", "start")
-    b = kit.machine("BMachine")
-    b.initial("Wait")
-    for state in ("Wait", "Ready", "Y"):
-        b.state(state)
-    b.transition("Wait", "Ready", "launch")
-    b.transition("Ready", "Y", "start")
-    kit.member("A", machine=a)
-    kit.member("B", machine=b)
+    for member, states in (("A", ("Idle", "X", "Z")), ("B", ("Wait", "Ready", "Y"))):
+        machine = kit.machine(f"{member}Machine")
+        machine.initial(states[0])
+        for state in states:
+            machine.state(state)
+        machine.transition(states[0], states[1], "launch")
+        machine.transition(states[1], states[2], "start")
+        kit.member(member, machine=machine)
     kit.swarm("Swarm", {"A": 1, "B": 1})
     kit.property("Swarm", "p1", "never (A in X and B in Y)")
     model = write(kit, tmp_path, "transient")
