@@ -126,6 +126,38 @@ def test_nested_parallels_are_all_left(backend: str, tmp_path: Path, qt_availabl
     assert _run(tmp_path, "Nest", NESTED, backend) == WHOLE
 
 
+SIBLINGS = f"""{HEAD} initial="p" name="Siblings">
+  <datamodel><data id="x" expr="0"/></datamodel>
+  <parallel id="p">
+    <onexit><assign location="x" expr="x + 1"/></onexit>
+    <parallel id="q">
+      <onexit><assign location="x" expr="x + 10"/></onexit>
+      <state id="b"/>
+      <state id="c"><transition event="e" target="b"/></state>
+    </parallel>
+    <state id="d"><onexit><assign location="x" expr="x + 100"/></onexit></state>
+  </parallel>
+</scxml>
+"""
+
+
+@pytest.mark.parametrize("backend", ["qt", "asyncio", "smach", "scxml"])
+def test_a_transition_between_regions_of_a_nested_parallel_leaves_both(
+    backend: str, tmp_path: Path, qt_available: None
+) -> None:
+    """`c` to `b`, two children of `q`, itself a child of `p`: W3C's domain is the root (no
+    `<parallel>` is compound), so `p`, `q` and `d` are all exited (x = 111); the reader's region
+    around `q` would have kept `p` and `d`. Found by the hunting mode."""
+    document = tmp_path / "Siblings.scxml"
+    document.write_text(SIBLINGS, encoding="utf-8")
+    steps = [{"event": "e"}]
+    if backend == "qt":
+        trace = replay.run_qt(document, steps)
+    else:
+        (trace,) = replay.replay_many(document, "Siblings", [steps], backend)
+    assert [record["data"] for record in trace] == [{"x": 0}, {"x": 111}]
+
+
 TOP = f"""{HEAD} initial="Top" name="Top">
   {COUNTERS}</datamodel>
   <parallel id="Top">{A_TO_CHILD}{B_REGION}
