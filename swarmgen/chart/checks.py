@@ -22,9 +22,9 @@ from collections.abc import Callable, Sequence
 from swarmgen import diagnostics as dg
 from swarmgen import expr
 from swarmgen.chart import model as c
+from swarmgen.chart.qtorder import check_qt_order, state_spans
 from swarmgen.diagnostics import Diagnostic
-from swarmgen.ir.nodes import Model, State
-from swarmgen.ir.query import walk
+from swarmgen.ir.nodes import Model
 from swarmgen.records import dataclass
 from swarmgen.span import Span
 
@@ -47,7 +47,7 @@ def check_dataflow(model: Model, charts: Sequence[c.Chart]) -> list[Diagnostic]:
     return found
 
 
-CHART_RULES: tuple[ChartRule, ...] = (check_dataflow,)
+CHART_RULES: tuple[ChartRule, ...] = (check_dataflow, check_qt_order)
 
 
 def run(model: Model, charts: Sequence[c.Chart]) -> list[Diagnostic]:
@@ -67,7 +67,7 @@ def _chart(model: Model, chart: c.Chart) -> list[Diagnostic]:
     graph = _Graph(nodes, parents)
     start = [leaf for target in chart.initial for leaf in graph.entry_leaves(target)]
     undefined = {d.id for d in chart.data if d.default is None}
-    spans = _spans(model)
+    spans = state_spans(model)
     ids = _data_ids(chart)
     found = []
     for node in nodes.values():
@@ -179,15 +179,6 @@ def _outputs_written(owner: c.Node, transition: c.Transition) -> set[str]:
     if owner.call is None or not c.takes_outcome(transition.events, owner.id):
         return set()
     return {location for _, location in owner.call.results}
-
-
-def _spans(model: Model) -> dict[str, Span]:
-    return {
-        p.vertex.name: p.vertex.span
-        for m in model.machines
-        for p in walk(m)
-        if isinstance(p.vertex, State)
-    }
 
 
 class _Graph:

@@ -387,6 +387,20 @@ OUTPUT_UNUSED = register(
     message="output '{output}' of '{behaviour}' is written to '{location}', which nothing in "
     "'{member}' reads",
 )
+QT_ORDER = register(
+    "SG216",
+    "qt-transition-order",
+    "two transitions in different regions of a parallel state that one event takes together, "
+    "both with actions, the later region's deeper: Qt SCXML runs them deepest first, W3C and "
+    "every other backend in document order, so the emitted SCXML in Qt may differ "
+    "(docs/semantics.md)",
+    WARNING,
+    message="in '{chart}', Qt SCXML runs the actions of the transition from '{second}' before "
+    "those of the transition from '{first}', which every other backend runs first (W3C's "
+    "document order)",
+    hint="make the two transitions' actions independent of their order (different data, no "
+    "raise or send in both), or take the event in one region",
+)
 MISSING_CAPABILITY = register(
     "SG211",
     "missing-capability",
@@ -482,6 +496,7 @@ __all__ = [
     "NO_WAY_OUT",
     "OUTPUT_UNUSED",
     "PATH_TOO_LONG",
+    "QT_ORDER",
     "RESERVED_FILE_NAME",
     "ROS_NAME_COLLISION",
     "SEVERAL_REFS",
