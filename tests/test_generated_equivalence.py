@@ -29,7 +29,7 @@ import pytest
 from hypothesis import HealthCheck, given, seed, settings
 from hypothesis import strategies as st
 
-from swarmgen import replay
+from swarmgen import pipeline, replay
 
 BACKENDS = ("asyncio", "smach", "scxml")
 EXAMPLES = int(os.environ.get("SWARMGEN_FUZZ_EXAMPLES", "40"))
@@ -260,10 +260,14 @@ def test_generated_charts_run_alike_everywhere(
         found = traces(path, steps)
     finally:
         faulthandler.cancel_dump_traceback_later()
+    # SG216: Qt runs transitions taken together deepest first, not in W3C's order (measured,
+    # docs/semantics.md); where it warns, the emitted SCXML in Qt is not the reference
+    qt_order = any(d.code.id == "SG216" for d in pipeline.validate(path).diagnostics)
+    reference = "asyncio" if qt_order else "scxml"
     for backend in ("asyncio", "smach"):
-        assert found[backend] == found["scxml"], (
-            f"{backend} differs from Qt SCXML\n{text}\nsteps: {steps}\n"
-            f"{backend}: {found[backend]}\nscxml: {found['scxml']}"
+        assert found[backend] == found[reference], (
+            f"{backend} differs from {reference}\n{text}\nsteps: {steps}\n"
+            f"{backend}: {found[backend]}\n{reference}: {found[reference]}"
         )
     if ORIGINAL:
         _as_written(path, text, steps, found["scxml"])
