@@ -77,14 +77,21 @@ def _counters(trace: list[dict[str, object]]) -> list[dict[str, object]]:
     return found
 
 
-def _run(tmp_path: Path, name: str, text: str, backend: str) -> list[dict[str, object]]:
-    """The counters after each of STEPS: in Qt (the document as written) or a backend."""
+def _trace(
+    tmp_path: Path, name: str, text: str, backend: str, steps: list[dict[str, object]]
+) -> list[dict[str, object]]:
+    """The document's trace in Qt (as written) or through a backend."""
     document = tmp_path / f"{name}.scxml"
     document.write_text(text, encoding="utf-8")
     if backend == "qt":
-        return _counters(replay.run_qt(document, STEPS))
-    (trace,) = replay.replay_many(document, name, [STEPS], backend)
-    return _counters(trace)
+        return replay.run_qt(document, steps)
+    (trace,) = replay.replay_many(document, name, [steps], backend)
+    return trace
+
+
+def _run(tmp_path: Path, name: str, text: str, backend: str) -> list[dict[str, object]]:
+    """The counters after each of STEPS."""
+    return _counters(_trace(tmp_path, name, text, backend, list(STEPS)))
 
 
 @pytest.mark.parametrize("case", sorted(CASES))
@@ -148,13 +155,7 @@ def test_a_transition_between_regions_of_a_nested_parallel_leaves_both(
     """`c` to `b`, two children of `q`, itself a child of `p`: W3C's domain is the root (no
     `<parallel>` is compound), so `p`, `q` and `d` are all exited (x = 111); the reader's region
     around `q` would have kept `p` and `d`. Found by the hunting mode."""
-    document = tmp_path / "Siblings.scxml"
-    document.write_text(SIBLINGS, encoding="utf-8")
-    steps = [{"event": "e"}]
-    if backend == "qt":
-        trace = replay.run_qt(document, steps)
-    else:
-        (trace,) = replay.replay_many(document, "Siblings", [steps], backend)
+    trace = _trace(tmp_path, "Siblings", SIBLINGS, backend, [{"event": "e"}])
     assert [record["data"] for record in trace] == [{"x": 0}, {"x": 111}]
 
 
