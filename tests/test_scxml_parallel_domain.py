@@ -53,6 +53,9 @@ A_TO_ITSELF = _a(a2='<transition event="reset" target="a"/>')
 A_SELF = _a(own='<transition event="reset" target="a"/>')
 A_INTERNAL = _a(own='<transition event="reset" type="internal" target="a1"/>')
 A_INSIDE = _a(a2='<transition event="reset" target="a1"/>')
+HISTORY = '<history id="h"><transition target="a1"/></history>'
+A_TO_HISTORY = _a(own=f'<transition event="reset" target="h"/>{HISTORY}')
+A_INSIDE_TO_HISTORY = _a(a2='<transition event="reset" target="h"/>', own=HISTORY)
 
 STEPS = [{"event": "go"}, {"event": "reset"}, {"event": "go"}]
 START = {"ax": 0, "bx": 0, "bn": 1}
@@ -65,6 +68,10 @@ CASES = {
     "self": (A_SELF, WHOLE),  # `a` -> `a`: the same
     "internal": (A_INTERNAL, LOCAL_A),  # type="internal": stays in `a`, in W3C too
     "inside": (A_INSIDE, LOCAL_A),  # a2 -> a1: the domain is `a` in both
+    # `a` -> its history: W3C's domain is that of the history's place, above p
+    "to_history": (A_TO_HISTORY, WHOLE),
+    # a2 -> a's history: the states it holds decide (here a2: the domain is `a`); kept
+    "inside_to_history": (A_INSIDE_TO_HISTORY, LOCAL_A),
 }
 
 

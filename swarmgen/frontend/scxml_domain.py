@@ -115,9 +115,14 @@ def reentered(
 ) -> etree._Element | None:
     """The state a transition from `source` to `target` (with `extra` further targets, each a
     `<parallel>` holding `target`) must exit and enter again so that the reader's UML leaves
-    what W3C leaves, or None when the two domains agree. A history target is left as it is: its
-    domain depends on what the history holds when the transition is taken."""
-    if local(target) == "history":
+    what W3C leaves, or None when the two domains agree.
+
+    W3C computes a history target's domain from the states it holds when the transition is
+    taken, all inside the history's parent: from a source outside that parent (or the parent
+    itself) the domain is the one the history's own place gives, so it is decided here; from a
+    source inside it, it depends on the run, and the reader's domain is kept (as for a history
+    directly in a `<parallel>`, which the reader holds in a region of its own)."""
+    if local(target) == "history" and not _history_decided(source, target):
         return None
     if internal and _w3c_compound(source) and source in _proper_ancestors(target):
         return None  # W3C's internal transition stays in its source, as the reader's does
@@ -126,6 +131,14 @@ def reentered(
         return None
     below = [a for a in (source, *_proper_ancestors(source)) if a.getparent() is w3c]
     return below[0] if below else None
+
+
+def _history_decided(source: etree._Element, history: etree._Element) -> bool:
+    """Whether the domain of a transition into `history` is the same whatever it holds."""
+    parent = history.getparent()
+    if parent is None or local(parent) == "parallel":
+        return False
+    return parent not in _proper_ancestors(source)
 
 
 def split_reentry(
