@@ -45,8 +45,30 @@ NESTED_PLAIN = (
     f'<state id="a">{_t(1)}</state><parallel id="q"><state id="b"/>'
     f'<state id="c">{_t(2)}</state></parallel>'
 )
+# the parallel state's own targetless transition, selected by `b` (first), and `c`'s
+ANCESTOR = f'{_t(1)}<state id="b"/><state id="c">{_t(2)}</state>'
+# the same, but `b` takes `e` itself: the parallel state's transition is not selected
+ANCESTOR_SHADOWED = f'{_t(1)}<state id="b">{_t(3)}</state><state id="c">{_t(2)}</state>'
+# one transition leaves its region (its exit set is all of p), the other is targetless: both
+# are taken (hunting mode, seed 31)
+LEAVING = (
+    f'<state id="a"><transition event="e" target="p"><assign location="x" expr="x * 10 + 1"/>'
+    f'</transition></state><parallel id="q"><state id="b"/><state id="c"><state id="c1">{_t(2)}'
+    "</state></state></parallel>"
+)
+# both leave for p (their exit sets meet: one is taken): W3C takes `a`'s (first), Qt `c1`'s
+# (deeper), which has no actions (hunting mode, seed 31)
+CONFLICT = (
+    '<state id="a"><transition event="e" target="p"><assign location="x" expr="x * 10 + 1"/>'
+    '</transition></state><parallel id="q"><state id="b"/><state id="c"><state id="c1">'
+    '<transition event="e" target="p"/></state></state></parallel>'
+)
 # document -> (Qt on the document as written, W3C / every backend)
 CASES = {
+    "conflict": (CONFLICT, 0, 1),
+    "ancestor": (ANCESTOR, 21, 12),
+    "ancestor_shadowed": (ANCESTOR_SHADOWED, 32, 32),
+    "leaving": (LEAVING, 21, 12),
     "shallow_then_deep": (SHALLOW_THEN_DEEP, 21, 12),
     "deep_then_shallow": (DEEP_THEN_SHALLOW, 12, 12),
     "same_depth": (SAME_DEPTH, 12, 12),

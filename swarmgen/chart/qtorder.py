@@ -2,15 +2,27 @@
 
 W3C takes the transitions of one microstep in the document order of the atomic states that
 selected them, and runs their executable content in that order (`selectTransitions`,
-`executeTransitionContent`); every swarmgen backend does. Qt SCXML 5.15 runs them deepest
-source first, in document order only among sources at the same depth (measured on documents
-with two to four parallel regions: `tests/test_qt_order.py`). The two orders differ, and the
+`executeTransitionContent`); every swarmgen backend does. Qt SCXML 5.15 sorts them first
+(`removeConflictingTransitions`): a descendant's source before its ancestor's, else the source
+deeper below their common ancestor, and only then document order (measured:
+`tests/test_qt_order.py`). Two transitions are taken together when one event enables both and
+their exit sets do not meet: in two regions of one parallel state, both staying inside their
+regions, or one of them targetless (its exit set is empty). The orders then differ, and the
 emitted SCXML run in Qt may end with other data or queue other events than every other backend,
-when two transitions in different regions of one `<parallel>` can be taken by one event, both
-have actions, and the later region's source is deeper in the emitted document. No rewriting of
-the document puts them in W3C's order in Qt (depth is the structure itself), so the rule says
-where the promise of one trace cannot hold for Qt: docs/semantics.md, "Qt SCXML's order of
-transitions taken together".
+when both have actions and
+
+- the two are in regions R_i before R_k of a parallel state and the one in R_k is deeper, or
+- one is on the parallel state or above it, selected by an earlier region that handles the event
+  nowhere (W3C: first), and the other inside a later region (Qt: first, the descendant).
+
+When their exit sets meet (both have targets and one leaves its region), only one is taken:
+W3C keeps the first in its order, Qt the first in its own, so in the first case Qt takes the
+other transition altogether (found by the hunting mode, seed 31: a transition from a deeper
+region to the parallel state itself won over the earlier region's).
+
+No rewriting of the document puts them in W3C's order in Qt (depth is the structure itself), so
+the rule says where the promise of one trace cannot hold for Qt: docs/semantics.md, "Qt SCXML's
+order of transitions taken together".
 """
 
 from __future__ import annotations
@@ -34,9 +46,18 @@ def check_qt_order(model: Model, charts: Sequence[c.Chart]) -> list[Diagnostic]:
     found: list[Diagnostic] = []
     for chart in charts:
         for top in chart.children:  # the document's children: depth 1 under <scxml>
-            for depth, node in _walk(top, 1):
-                if node.kind == "parallel":
-                    found += _parallel(chart, node, depth, spans)
+            found += _search(chart, top, 1, [], spans)
+    return found
+
+
+def _search(
+    chart: c.Chart, node: c.Node, depth: int, above: list[_Sourced], spans: dict[str, Span]
+) -> list[Diagnostic]:
+    """Every parallel state under `node`, with the transitions of its ancestors."""
+    here = [*above, *((depth, node, t) for t in node.transitions if t.actions)]
+    found = _parallel(chart, node, depth, here, spans) if node.kind == "parallel" else []
+    for child in node.children:
+        found += _search(chart, child, depth + 1, here, spans)
     return found
 
 
@@ -46,35 +67,70 @@ def _walk(node: c.Node, depth: int) -> Iterator[tuple[int, c.Node]]:
         yield from _walk(child, depth + 1)
 
 
-def _parallel(chart: c.Chart, node: c.Node, depth: int, spans: dict[str, Span]) -> list[Diagnostic]:
-    regions = [list(_staying(region, depth + 1)) for region in node.children]
-    found: list[Diagnostic] = []
-    reported: set[tuple[str, str]] = set()
-    for index, earlier in enumerate(regions):
-        for later in regions[index + 1 :]:
-            for first in earlier:
-                for second in later:
-                    pair = (first[1].id, second[1].id)
-                    if pair not in reported and _reordered(first, second):
-                        reported.add(pair)
-                        found.append(_diagnostic(chart, first, second, spans))
-    return found
+def _parallel(
+    chart: c.Chart, node: c.Node, depth: int, above: list[_Sourced], spans: dict[str, Span]
+) -> list[Diagnostic]:
+    """The reordered pairs among `node`'s regions, and between them and `above` (the
+    transitions of `node` and its ancestors), once per pair of sources."""
+    regions = [list(_inside(region, depth + 1)) for region in node.children]
+    pairs: dict[tuple[str, str], tuple[_Sourced, _Sourced]] = {}
+    for k, later in enumerate(regions):
+        for second in later:
+            for first in _before(node, regions, k, second, above):
+                pairs.setdefault((first[1].id, second[1].id), (first, second))
+    return [_diagnostic(chart, first, second, spans) for first, second in pairs.values()]
 
 
-def _staying(region: c.Node, depth: int) -> Iterator[_Sourced]:
-    """The transitions in `region` that have actions and stay inside it (one that leaves it
-    conflicts with every transition of the other regions: W3C and Qt take one of them)."""
-    inside = {n.id for _, n in _walk(region, 0)}
+def _before(
+    node: c.Node, regions: list[list[_Sourced]], k: int, second: _Sourced, above: list[_Sourced]
+) -> Iterator[_Sourced]:
+    """The transitions W3C runs before `second` (in region k) and Qt after it."""
+    for i in range(k):
+        held = (node.children[i], node.children[k])
+        for first in regions[i]:
+            if second[0] > first[0] and _together(first, second, held):
+                yield first
+    for first in above:
+        earlier_silent = any(_silent(node.children[i], first) for i in range(k))
+        if earlier_silent and _together(first, second, None):
+            yield first
+
+
+def _inside(region: c.Node, depth: int) -> Iterator[_Sourced]:
+    """The transitions in `region`."""
     for offset, node in _walk(region, 0):
         for transition in node.transitions:
-            if transition.actions and all(t in inside for t in transition.targets):
-                yield depth + offset, node, transition
+            yield depth + offset, node, transition
 
 
-def _reordered(first: _Sourced, second: _Sourced) -> bool:
-    """Whether Qt runs `second` (in a later region) before `first`: one event can take both,
-    and `second`'s source is deeper."""
-    return second[0] > first[0] and _overlap(first[2].events, second[2].events)
+def _silent(region: c.Node, above: _Sourced) -> bool:
+    """Whether the region handles none of the events of a transition above it (with actions or
+    not): its atomic states then select that one (W3C's order puts it at the region's place)."""
+    return not any(
+        _overlap(t.events, above[2].events) for _, n in _walk(region, 0) for t in n.transitions
+    )
+
+
+def _together(first: _Sourced, second: _Sourced, regions: tuple[c.Node, c.Node] | None) -> bool:
+    """Whether Qt's order changes what one event does with both transitions: `first` is the one
+    W3C takes first, `regions` the regions holding them (None: `first` is above the parallel
+    state). Taken together (one is targetless, or both stay inside their regions), their actions
+    run in the other order; when their exit sets meet, W3C keeps the first and Qt the deeper
+    (the descendant, for a transition above: the same in both)."""
+    one, two = first[2], second[2]
+    if not _overlap(one.events, two.events):
+        return False
+    apart = not one.targets or not two.targets
+    if regions is not None and not apart:
+        apart = all(_stays(t, region) for t, region in zip((one, two), regions, strict=True))
+    if apart:
+        return bool(one.actions and two.actions)
+    return regions is not None and (one.targets != two.targets or bool(one.actions or two.actions))
+
+
+def _stays(transition: c.Transition, region: c.Node) -> bool:
+    inside = {n.id for _, n in _walk(region, 0)}
+    return all(t in inside for t in transition.targets)
 
 
 def _overlap(left: tuple[str, ...], right: tuple[str, ...]) -> bool:

@@ -390,16 +390,16 @@ OUTPUT_UNUSED = register(
 QT_ORDER = register(
     "SG216",
     "qt-transition-order",
-    "two transitions in different regions of a parallel state that one event takes together, "
-    "both with actions, the later region's deeper: Qt SCXML runs them deepest first, W3C and "
-    "every other backend in document order, so the emitted SCXML in Qt may differ "
-    "(docs/semantics.md)",
+    "two transitions in different regions of a parallel state (or one above it) that one event "
+    "enables together, the later region's deeper: Qt SCXML gives the deeper one precedence, W3C "
+    "and every other backend document order, so the emitted SCXML in Qt may run their actions in "
+    "the other order or take the other one (docs/semantics.md)",
     WARNING,
-    message="in '{chart}', Qt SCXML runs the actions of the transition from '{second}' before "
-    "those of the transition from '{first}', which every other backend runs first (W3C's "
-    "document order)",
+    message="in '{chart}', Qt SCXML gives the transition from '{second}' precedence over the one "
+    "from '{first}' (its actions first, or it alone when the two conflict); every other backend "
+    "follows W3C's document order",
     hint="make the two transitions' actions independent of their order (different data, no "
-    "raise or send in both), or take the event in one region",
+    "raise or send in both) and their targets alike, or take the event in one region",
 )
 MISSING_CAPABILITY = register(
     "SG211",
