@@ -39,25 +39,31 @@ from swarmgen.span import Span
 _Sourced = tuple[int, c.Node, c.Transition]  # (depth of the source, source, transition)
 
 
+_Pair = tuple[_Sourced, _Sourced]  # (the transition W3C takes first, the one Qt takes first)
+
+
 def check_qt_order(model: Model, charts: Sequence[c.Chart]) -> list[Diagnostic]:
     """SG216 for every pair of transitions Qt would take in another order, once per pair of
     source states."""
+    found = [
+        (chart, pair)
+        for chart in charts
+        for top in chart.children  # the document's children: depth 1 under <scxml>
+        for pair in _search(top, 1, [])
+    ]
+    if not found:
+        return []  # (the model's spans are looked up only for a finding)
     spans = state_spans(model)
-    found: list[Diagnostic] = []
-    for chart in charts:
-        for top in chart.children:  # the document's children: depth 1 under <scxml>
-            found += _search(chart, top, 1, [], spans)
-    return found
+    return [_diagnostic(chart, first, second, spans) for chart, (first, second) in found]
 
 
-def _search(
-    chart: c.Chart, node: c.Node, depth: int, above: list[_Sourced], spans: dict[str, Span]
-) -> list[Diagnostic]:
+def _search(node: c.Node, depth: int, above: list[_Sourced]) -> list[_Pair]:
     """Every parallel state under `node`, with the transitions of its ancestors."""
-    here = [*above, *((depth, node, t) for t in node.transitions if t.actions)]
-    found = _parallel(chart, node, depth, here, spans) if node.kind == "parallel" else []
+    own = [(depth, node, t) for t in node.transitions if t.actions]
+    here = [*above, *own] if own else above
+    found = _parallel(node, depth, here) if node.kind == "parallel" else []
     for child in node.children:
-        found += _search(chart, child, depth + 1, here, spans)
+        found += _search(child, depth + 1, here)
     return found
 
 
@@ -67,51 +73,59 @@ def _walk(node: c.Node, depth: int) -> Iterator[tuple[int, c.Node]]:
         yield from _walk(child, depth + 1)
 
 
-def _parallel(
-    chart: c.Chart, node: c.Node, depth: int, above: list[_Sourced], spans: dict[str, Span]
-) -> list[Diagnostic]:
+def _parallel(node: c.Node, depth: int, above: list[_Sourced]) -> list[_Pair]:
     """The reordered pairs among `node`'s regions, and between them and `above` (the
     transitions of `node` and its ancestors), once per pair of sources."""
-    regions = [list(_inside(region, depth + 1)) for region in node.children]
-    pairs: dict[tuple[str, str], tuple[_Sourced, _Sourced]] = {}
+    regions = [_Region(child, depth + 1) for child in node.children]
+    # the first region whose atomic states select each transition above (W3C's place for it)
+    selected = [
+        next((k for k, region in enumerate(regions) if region.silent(first)), len(regions))
+        for first in above
+    ]
+    pairs: dict[tuple[str, str], _Pair] = {}
     for k, later in enumerate(regions):
-        for second in later:
-            for first in _before(node, regions, k, second, above):
+        for second in later.transitions:
+            for first in _before(regions, k, second, above, selected):
                 pairs.setdefault((first[1].id, second[1].id), (first, second))
-    return [_diagnostic(chart, first, second, spans) for first, second in pairs.values()]
+    return list(pairs.values())
+
+
+class _Region:
+    """A region of a parallel state: its transitions (with their depths) and its nodes."""
+
+    def __init__(self, node: c.Node, depth: int) -> None:
+        walked = list(_walk(node, depth))
+        self.transitions: list[_Sourced] = [(d, n, t) for d, n in walked for t in n.transitions]
+        self.ids = frozenset(n.id for _, n in walked)
+
+    def silent(self, above: _Sourced) -> bool:
+        """Whether the region takes none of the events of a transition above it (with actions
+        or not): its atomic states then select that one."""
+        return not any(_overlap(t.events, above[2].events) for _, _, t in self.transitions)
+
+    def holds(self, transition: c.Transition) -> bool:
+        """Whether every target of the transition is inside the region."""
+        return all(t in self.ids for t in transition.targets)
 
 
 def _before(
-    node: c.Node, regions: list[list[_Sourced]], k: int, second: _Sourced, above: list[_Sourced]
+    regions: list[_Region],
+    k: int,
+    second: _Sourced,
+    above: list[_Sourced],
+    selected: list[int],
 ) -> Iterator[_Sourced]:
     """The transitions W3C runs before `second` (in region k) and Qt after it."""
-    for i in range(k):
-        held = (node.children[i], node.children[k])
-        for first in regions[i]:
-            if second[0] > first[0] and _together(first, second, held):
+    for region in regions[:k]:
+        for first in region.transitions:
+            if second[0] > first[0] and _together(first, second, (region, regions[k])):
                 yield first
-    for first in above:
-        earlier_silent = any(_silent(node.children[i], first) for i in range(k))
-        if earlier_silent and _together(first, second, None):
+    for first, place in zip(above, selected, strict=True):
+        if place < k and _together(first, second, None):
             yield first
 
 
-def _inside(region: c.Node, depth: int) -> Iterator[_Sourced]:
-    """The transitions in `region`."""
-    for offset, node in _walk(region, 0):
-        for transition in node.transitions:
-            yield depth + offset, node, transition
-
-
-def _silent(region: c.Node, above: _Sourced) -> bool:
-    """Whether the region handles none of the events of a transition above it (with actions or
-    not): its atomic states then select that one (W3C's order puts it at the region's place)."""
-    return not any(
-        _overlap(t.events, above[2].events) for _, n in _walk(region, 0) for t in n.transitions
-    )
-
-
-def _together(first: _Sourced, second: _Sourced, regions: tuple[c.Node, c.Node] | None) -> bool:
+def _together(first: _Sourced, second: _Sourced, regions: tuple[_Region, _Region] | None) -> bool:
     """Whether Qt's order changes what one event does with both transitions: `first` is the one
     W3C takes first, `regions` the regions holding them (None: `first` is above the parallel
     state). Taken together (one is targetless, or both stay inside their regions), their actions
@@ -122,15 +136,10 @@ def _together(first: _Sourced, second: _Sourced, regions: tuple[c.Node, c.Node] 
         return False
     apart = not one.targets or not two.targets
     if regions is not None and not apart:
-        apart = all(_stays(t, region) for t, region in zip((one, two), regions, strict=True))
+        apart = regions[0].holds(one) and regions[1].holds(two)
     if apart:
         return bool(one.actions and two.actions)
     return regions is not None and (one.targets != two.targets or bool(one.actions or two.actions))
-
-
-def _stays(transition: c.Transition, region: c.Node) -> bool:
-    inside = {n.id for _, n in _walk(region, 0)}
-    return all(t in inside for t in transition.targets)
 
 
 def _overlap(left: tuple[str, ...], right: tuple[str, ...]) -> bool:

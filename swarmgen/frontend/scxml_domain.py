@@ -17,10 +17,9 @@ from collections.abc import Sequence
 
 from lxml import etree
 
-from swarmgen.frontend.scxml_raw import children, local, sg
+from swarmgen.frontend.scxml_raw import STATE_TAGS, children, local, sg
 
-_CHILD_STATES = ("state", "parallel", "final")
-_STATES = (*_CHILD_STATES, "history")
+_CHILD_STATES = ("state", "parallel", "final")  # what makes a <state> compound (W3C)
 
 
 def is_own_region(node: etree._Element) -> bool:
@@ -30,7 +29,7 @@ def is_own_region(node: etree._Element) -> bool:
     plain = local(node) == "state" and not children(
         node, "onentry", "onexit", "transition", "invoke"
     )
-    return sg(node, "region") is not None or (plain and bool(children(node, *_STATES)))
+    return sg(node, "region") is not None or (plain and bool(children(node, *STATE_TAGS)))
 
 
 class _Wrapper:
@@ -58,7 +57,7 @@ def _w3c_compound(node: etree._Element) -> bool:
 def _proper_ancestors(node: etree._Element) -> list[etree._Element]:
     found = []
     parent = node.getparent()
-    while parent is not None and local(parent) in (*_STATES, "scxml"):
+    while parent is not None and local(parent) in (*STATE_TAGS, "scxml"):
         found.append(parent)
         parent = parent.getparent()
     return found
@@ -66,8 +65,9 @@ def _proper_ancestors(node: etree._Element) -> list[etree._Element]:
 
 def _w3c_domain(source: etree._Element, others: Sequence[etree._Element]) -> etree._Element | None:
     """W3C `findLCCA([source, *others])`."""
+    holders = [_proper_ancestors(o) for o in others]
     for ancestor in _proper_ancestors(source):
-        if _w3c_compound(ancestor) and all(ancestor in _proper_ancestors(o) for o in others):
+        if _w3c_compound(ancestor) and all(ancestor in held for held in holders):
             return ancestor
     return None
 
@@ -122,6 +122,8 @@ def reentered(
     itself) the domain is the one the history's own place gives, so it is decided here; from a
     source inside it, it depends on the run, and the reader's domain is kept (as for a history
     directly in a `<parallel>`, which the reader holds in a region of its own)."""
+    if not any(local(a) == "parallel" for a in _proper_ancestors(source)):
+        return None  # no region the reader adds holds the source: the domains are W3C's
     if local(target) == "history" and not _history_decided(source, target):
         return None
     if internal and _w3c_compound(source) and source in _proper_ancestors(target):

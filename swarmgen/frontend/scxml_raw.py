@@ -18,6 +18,7 @@ SCXML_NS = "http://www.w3.org/2005/07/scxml"
 SG_NS = "urn:swarmgen:scxml:1"
 PROFILE_URI = "http:///schemas/CPSwarm/_L1oOEIo-Ee-0HcfyqRPQXg/0"
 PRIMITIVES = {"Integer", "Real", "Boolean", "String", "UnlimitedNatural"}
+STATE_TAGS = ("state", "parallel", "final", "history")  # SCXML's state-like elements
 _PRIMITIVE_HREF = "pathmap://UML_LIBRARIES/UMLPrimitiveTypes.library.uml#"
 
 

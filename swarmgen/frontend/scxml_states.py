@@ -18,10 +18,9 @@ from swarmgen.frontend.raw import RawElement
 from swarmgen.frontend.scxml_actions import Actions
 from swarmgen.frontend.scxml_domain import is_own_region, reentered, split_reentry
 from swarmgen.frontend.scxml_invoke import Invokes
-from swarmgen.frontend.scxml_raw import Builder, children, in_scxml, local, sg
+from swarmgen.frontend.scxml_raw import STATE_TAGS, Builder, children, in_scxml, local, sg
 from swarmgen.records import dataclass
 
-_STATES = ("state", "parallel", "final", "history")
 _KINDS = {"shallow": "shallowHistory", "deep": "deepHistory"}
 _POINTS = ("entryPoint", "exitPoint")
 
@@ -59,15 +58,15 @@ class States:
         """The document's top level as the machine's region(s)."""
         self.document_machine = machine
         for node in root.iter(tag=etree.Element):
-            if node.get("id") and in_scxml(node) and local(node) in _STATES:
+            if node.get("id") and in_scxml(node) and local(node) in STATE_TAGS:
                 self.by_id.setdefault(str(node.get("id")), node)
-        kids = children(root, *_STATES)
+        kids = children(root, *STATE_TAGS)
         name = machine.name
         whole = [k for k in kids if not (local(k) == "final" and k.get("id") == "terminated")]
         top = whole[0] if len(whole) == 1 and local(whole[0]) == "parallel" else None
         if top is not None and top.get("id") == name and sg(top, "name") is None:
             self.vertices[name] = machine  # several top regions (docs/scxml.md)
-            for region in children(top, *_STATES):
+            for region in children(top, *STATE_TAGS):
                 self.region_of_state(machine, region)
             for final in (k for k in kids if k is not top):
                 self.vertex(final, self.first_region or machine)
@@ -151,7 +150,7 @@ class States:
         if is_own_region(node):
             if node.get("id"):
                 self.vertices[str(node.get("id"))] = owner
-            self.region(owner, node, children(node, *_STATES), name, node.get("initial"))
+            self.region(owner, node, children(node, *STATE_TAGS), name, node.get("initial"))
         else:
             region = self.b.make("region", "Region", owner, node, {"name": name})
             if owner is self.document_machine:
@@ -290,10 +289,10 @@ class States:
         if submachine:
             self.submachine(node, vertex, ident, submachine)
         elif local(node) == "parallel":
-            for kid in children(node, *_STATES):
+            for kid in children(node, *STATE_TAGS):
                 self.region_of_state(vertex, kid)
-        elif children(node, *_STATES):
-            self.region(vertex, node, children(node, *_STATES), "Region", node.get("initial"))
+        elif children(node, *STATE_TAGS):
+            self.region(vertex, node, children(node, *STATE_TAGS), "Region", node.get("initial"))
         elif node.get("initial"):
             self.b.report(
                 dg.SCXML_BAD_DOCUMENT,
@@ -309,7 +308,7 @@ class States:
         if known is None:
             known = self.b.make("packagedElement", "StateMachine", self.model, node, {"name": name})
             self.machines[name] = known
-            self.region(known, node, children(node, *_STATES), "Region", node.get("initial"))
+            self.region(known, node, children(node, *STATE_TAGS), "Region", node.get("initial"))
         else:
             self.skipped.update(str(d.get("id")) for d in node.iterdescendants() if d.get("id"))
         vertex.attrs["submachine"] = str(known.id)
@@ -471,7 +470,7 @@ def _root_initial(node: etree._Element, ident: str) -> bool:
         and parent.get("initial") == ident
         and ident.startswith("initial")
         and sg(node, "name") is None
-        and not children(node, *_STATES, "onentry", "onexit")
+        and not children(node, *STATE_TAGS, "onentry", "onexit")
     )
 
 
@@ -482,6 +481,6 @@ def _compound(state: etree._Element | None) -> bool:
         return False
     return (
         local(state) == "parallel"
-        or bool(children(state, *_STATES))
+        or bool(children(state, *STATE_TAGS))
         or bool(sg(state, "submachine"))
     )

@@ -94,15 +94,15 @@ class Observer:
         self._sets: dict[frozenset[int], int] = {}
         # per member type, the state names and data its atoms read: all a step may change
         # without the properties seeing it is the rest (`projection`)
-        self._watched: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {}
-        for atom in self.atoms:
-            if isinstance(atom, InState | Count | Datum):
-                states, data = self._watched.get(atom.member, (frozenset(), ()))
-                if isinstance(atom, Datum):
-                    data = tuple(sorted({*data, atom.datum}))
-                else:
-                    states = states | {atom.state}
-                self._watched[atom.member] = (states, data)
+        named = [a for a in self.atoms if isinstance(a, InState | Count)]
+        read = [a for a in self.atoms if isinstance(a, Datum)]
+        self._watched: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {
+            kind: (
+                frozenset(a.state for a in named if a.member == kind),
+                tuple(sorted({a.datum for a in read if a.member == kind})),
+            )
+            for kind in {a.member for a in [*named, *read]}
+        }
         self._value_labels: dict[int, frozenset[int]] = {}  # member value -> its steps' labels
         self._safety_props = sum(p.tree.kind in ("always", "never") for p in self.props)
 
